@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs twinray's build dependencies from Debian 12's archive. Idempotent: when every package
+# is already installed it returns at once without touching apt.
+set -euo pipefail
+
+PACKAGES=(
+  cmake ninja-build g++ pkg-config
+  libembree-dev          # Embree 3.13.5: the reference backend
+  libtbb-dev             # oneTBB: parallel build and render
+  libopenimageio-dev     # image I/O (EXR, PNG, HDR)
+  libopenexr-dev
+  libglm-dev
+  libgtest-dev libgmock-dev
+  libbenchmark-dev
+  nlohmann-json3-dev     # scene format
+  libcli11-dev           # command line
+  libfmt-dev
+  libtinyobjloader-dev   # OBJ loading
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "twinray: installing ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
