@@ -24,11 +24,12 @@ class InputError : public std::runtime_error {
   static std::string format(const std::filesystem::path& file, const std::string& where, const std::string& msg) {
     std::string s = file.empty() ? std::string("<input>") : file.string();
     if (where.rfind("line ", 0) == 0) {
-      s += ":" + where.substr(5);
+      s.append(":").append(where, 5, std::string::npos);
     } else if (!where.empty()) {
-      s += ": at " + where;
+      s.append(": at ").append(where);
     }
-    return s + ": " + msg;
+    s.append(": ").append(msg);
+    return s;
   }
 
   std::filesystem::path file_;

@@ -1,0 +1,28 @@
+#pragma once
+// Backends by name: the one place that knows every implementation.
+//
+//   bvh           hand-written binned SAH BVH (backends/bvh)
+//   embree        Embree 3, RTC_SCENE_FLAG_ROBUST: the correctness reference
+//   embree-fast   Embree 3, default flags: the speed reference
+//   brute         a loop over every primitive: the oracle
+//   plugin:PATH   an external BVH loaded from a shared library through the C ABI (backends/plugin)
+
+#include "core/backend/backend.h"
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace twinray {
+
+// Throws std::invalid_argument naming the valid choices for an unknown name, InputError for a bad plugin.
+std::unique_ptr<Backend> make_backend(std::string_view name);
+
+// The built-in names, in the order help texts list them.
+std::vector<std::string> backend_names();
+
+// Splits "a,b,c" and checks every name (built-in or plugin:PATH). Throws std::invalid_argument.
+std::vector<std::string> parse_backend_list(std::string_view list);
+
+}  // namespace twinray

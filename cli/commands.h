@@ -1,0 +1,22 @@
+#pragma once
+// Subcommands of the `twinray` program. Each add_*_command registers its options on a CLI11 subcommand
+// and sets `run`, which main() calls after parsing. The return value is the process exit code:
+//   0 success, 1 the check or comparison failed, 2 bad input (message on stderr, no output left behind).
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace twinray::cli {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitCheckFailed = 1;
+inline constexpr int kExitBadInput = 2;
+
+using CommandRunner = std::function<int()>;
+
+void add_info_command(CLI::App& app, CommandRunner& run);
+void add_crosscheck_command(CLI::App& app, CommandRunner& run);
+void add_render_command(CLI::App& app, CommandRunner& run);
+
+}  // namespace twinray::cli

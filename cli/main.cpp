@@ -1,0 +1,39 @@
+// twinray: one program, one subcommand per job. See docs/cli.md for the contract (flags, exit codes, JSON).
+
+#include "cli/commands.h"
+#include "core/util/input_error.h"
+
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <exception>
+
+int main(int argc, char** argv) {
+  using namespace twinray::cli;
+  CLI::App app{"twinray: a path tracer over interchangeable ray-intersection backends (bvh, embree, embree-fast, brute)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "twinray 0.1.0");
+
+  CommandRunner run;
+  add_info_command(app, run);
+  add_crosscheck_command(app, run);
+  add_render_command(app, run);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version are "errors" with exit code 0 in CLI11.
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+
+  try {
+    return run ? run() : kExitBadInput;
+  } catch (const twinray::InputError& e) {
+    fmt::print(stderr, "twinray: error: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "twinray: error: {}\n", e.what());
+    return kExitBadInput;
+  }
+}
