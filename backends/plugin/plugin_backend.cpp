@@ -1,0 +1,316 @@
+#include "backends/plugin/plugin_backend.h"
+
+#include "backends/plugin/twinray_plugin.h"
+#include "core/util/input_error.h"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cstdint>
+#include <exception>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace twinray {
+
+static_assert(sizeof(twinray_id) == sizeof(std::uint32_t), "ids cross the ABI as 32-bit unsigned integers");
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "mesh positions are passed as packed float triples");
+static_assert(sizeof(glm::uvec3) == 3 * sizeof(twinray_id), "mesh indices are passed as packed id triples");
+
+namespace {
+
+// Rays handed to an optional batch entry point per call; the staging buffers live on the stack.
+constexpr std::size_t kBatchChunk = 256;
+
+// dlopen handle, closed last (after the plugin instance is destroyed).
+class SharedLibrary {
+ public:
+  explicit SharedLibrary(void* handle) : handle_(handle) {}
+  ~SharedLibrary() {
+    if (handle_ != nullptr) dlclose(handle_);
+  }
+  SharedLibrary(const SharedLibrary&) = delete;
+  SharedLibrary& operator=(const SharedLibrary&) = delete;
+  void* get() const { return handle_; }
+
+ private:
+  void* handle_;
+};
+
+twinray_ray to_plugin_ray(const Ray& r) {
+  twinray_ray p;
+  p.org[0] = r.org.x;
+  p.org[1] = r.org.y;
+  p.org[2] = r.org.z;
+  p.tmin = r.tmin;
+  p.dir[0] = r.dir.x;
+  p.dir[1] = r.dir.y;
+  p.dir[2] = r.dir.z;
+  p.tmax = r.tmax;
+  return p;
+}
+
+twinray_hit plugin_miss() {
+  twinray_hit h{};
+  h.geom_id = TWINRAY_INVALID_ID;
+  h.prim_id = TWINRAY_INVALID_ID;
+  return h;
+}
+
+void add_stats(QueryStats* stats, std::size_t queries, const twinray_query_stats& plugin) {
+  if (stats == nullptr) return;
+  stats->queries += queries;
+  stats->nodes_visited += plugin.nodes_visited;
+  stats->primitives_tested += plugin.primitives_tested;
+}
+
+class PluginBackend final : public Backend {
+ public:
+  PluginBackend(std::filesystem::path path, std::unique_ptr<SharedLibrary> library, const twinray_plugin_v1& table,
+                void* self)
+      : path_(std::move(path)), library_(std::move(library)), table_(table), self_(self),
+        name_(std::string("plugin:") + table.name) {}
+
+  ~PluginBackend() override { table_.destroy(self_); }
+
+  std::string_view name() const override { return name_; }
+
+  BackendTraits traits() const override {
+    BackendTraits t;
+    t.counts_traversal = (table_.flags & TWINRAY_PLUGIN_COUNTS_TRAVERSAL) != 0;
+    t.honours_ties = (table_.flags & TWINRAY_PLUGIN_HONOURS_TIES) != 0;
+    t.watertight = (table_.flags & TWINRAY_PLUGIN_WATERTIGHT) != 0;
+    return t;
+  }
+
+  void build(const SceneGeometry& geometry) override;
+  BuildStats build_stats() const override { return stats_; }
+
+  bool intersect(const Ray& ray, Hit& hit, QueryStats* stats) const override {
+    hit = Hit{};
+    twinray_query_stats counters{};
+    bool found = false;
+    if (is_valid_ray(ray)) {
+      const twinray_ray r = to_plugin_ray(ray);
+      twinray_hit h = plugin_miss();
+      guarded("intersect1", [&] { found = table_.intersect1(self_, &r, &h, &counters) != 0; });
+      if (found) accept_hit(h, hit);
+    }
+    add_stats(stats, 1, counters);
+    return found;
+  }
+
+  bool occluded(const Ray& ray, QueryStats* stats) const override {
+    twinray_query_stats counters{};
+    bool blocked = false;
+    if (is_valid_ray(ray)) {
+      const twinray_ray r = to_plugin_ray(ray);
+      guarded("occluded1", [&] { blocked = table_.occluded1(self_, &r, &counters) != 0; });
+    }
+    add_stats(stats, 1, counters);
+    return blocked;
+  }
+
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const override;
+  void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) const override;
+
+ private:
+  // Runs a plugin call and turns an escaping C++ exception (a contract violation, but a common one in
+  // plugins written in C++) into an error that names the plugin.
+  template <typename F>
+  void guarded(const char* what, F&& call) const {
+    try {
+      call();
+    } catch (const std::exception& e) {
+      throw std::runtime_error(name_ + ": " + what + " threw: " + e.what());
+    } catch (...) {
+      throw std::runtime_error(name_ + ": " + what + " threw a non-standard exception");
+    }
+  }
+
+  // A hit naming a geometry or primitive that does not exist would make the renderer index out of
+  // bounds, so it is an error rather than a wrong answer for the crosscheck to report.
+  void accept_hit(const twinray_hit& h, Hit& hit) const {
+    if (h.geom_id >= prim_count_by_geom_.size() || h.prim_id >= prim_count_by_geom_[h.geom_id])
+      throw std::runtime_error(name_ + ": reported a hit on geom_id " + std::to_string(h.geom_id) + ", prim_id " +
+                               std::to_string(h.prim_id) + ", which the scene does not have");
+    hit.t = h.t;
+    hit.u = h.u;
+    hit.v = h.v;
+    hit.geom_id = h.geom_id;
+    hit.prim_id = h.prim_id;
+    hit.ng = glm::vec3(h.ng[0], h.ng[1], h.ng[2]);
+  }
+
+  std::filesystem::path path_;
+  std::unique_ptr<SharedLibrary> library_;  // destroyed after the destructor body has destroyed self_
+  twinray_plugin_v1 table_;                 // a copy: the plugin's table need not stay writable or aligned
+  void* self_;
+  std::string name_;
+  // What the plugin reads during and after build (twinray_plugin.h: valid until destroy).
+  std::vector<twinray_mesh> meshes_;
+  std::vector<twinray_sphere> spheres_;
+  std::vector<std::uint32_t> prim_count_by_geom_;  // 0 for ids that are not in the scene
+  BuildStats stats_;
+};
+
+void PluginBackend::build(const SceneGeometry& geometry) {
+  const auto start = std::chrono::steady_clock::now();
+  prim_count_by_geom_.assign(geometry.geom_id_end(), 0);
+  meshes_.clear();
+  spheres_.clear();
+  for (const TriangleMesh& m : geometry.meshes) {
+    twinray_mesh pm;
+    pm.geom_id = m.geom_id;
+    pm.positions = reinterpret_cast<const float*>(m.positions.data());
+    pm.vertex_count = m.positions.size();
+    pm.indices = reinterpret_cast<const twinray_id*>(m.indices.data());
+    pm.triangle_count = m.indices.size();
+    meshes_.push_back(pm);
+    prim_count_by_geom_[m.geom_id] = static_cast<std::uint32_t>(m.indices.size());
+  }
+  for (const Sphere& s : geometry.spheres) {
+    twinray_sphere ps;
+    ps.geom_id = s.geom_id;
+    ps.center[0] = s.center.x;
+    ps.center[1] = s.center.y;
+    ps.center[2] = s.center.z;
+    ps.radius = s.radius;
+    spheres_.push_back(ps);
+    prim_count_by_geom_[s.geom_id] = 1;
+  }
+  twinray_geometry g;
+  g.meshes = meshes_.data();
+  g.mesh_count = meshes_.size();
+  g.spheres = spheres_.data();
+  g.sphere_count = spheres_.size();
+  g.geom_id_end = geometry.geom_id_end();
+
+  char error[1024] = {};
+  int status = TWINRAY_ERROR;
+  guarded("build", [&] { status = table_.build(self_, &g, error, sizeof(error)); });
+  if (status != TWINRAY_OK) {
+    error[sizeof(error) - 1] = '\0';  // do not trust the plugin to terminate it
+    throw std::runtime_error(name_ + " (" + path_.string() + "): build failed: " +
+                             (error[0] != '\0' ? error : "no message given"));
+  }
+
+  stats_ = BuildStats{};
+  stats_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats_.triangles = geometry.triangle_count();
+  stats_.spheres = geometry.sphere_count();
+  // What twinray handed over; whether the plugin builds anything for an empty kind is its own business.
+  stats_.built_triangles = geometry.has_triangles();
+  stats_.built_spheres = geometry.has_spheres();
+  if (table_.build_stats != nullptr) {
+    twinray_build_stats ps{};
+    guarded("build_stats", [&] { table_.build_stats(self_, &ps); });
+    stats_.memory_bytes = ps.memory_bytes;
+    stats_.nodes = ps.nodes;
+    stats_.leaves = ps.leaves;
+    stats_.max_depth = ps.max_depth;
+    stats_.sah_cost = ps.sah_cost;
+  }
+}
+
+// With a batch entry point: invalid rays are filtered out (they are misses), the valid ones are staged in
+// chunks and passed on. Without one, the base class loops over the single-ray calls.
+void PluginBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {
+  assert(rays.size() == hits.size());
+  if (table_.intersect_batch == nullptr) return Backend::intersect(rays, hits, stats);
+  twinray_ray staged[kBatchChunk];
+  twinray_hit results[kBatchChunk];
+  std::size_t source[kBatchChunk];
+  twinray_query_stats counters{};
+  for (std::size_t begin = 0; begin < rays.size(); begin += kBatchChunk) {
+    const std::size_t end = std::min(rays.size(), begin + kBatchChunk);
+    std::size_t count = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      hits[i] = Hit{};
+      if (!is_valid_ray(rays[i])) continue;
+      staged[count] = to_plugin_ray(rays[i]);
+      results[count] = plugin_miss();
+      source[count++] = i;
+    }
+    if (count == 0) continue;
+    guarded("intersect_batch", [&] { table_.intersect_batch(self_, staged, results, count, &counters); });
+    for (std::size_t k = 0; k < count; ++k)
+      if (results[k].geom_id != TWINRAY_INVALID_ID) accept_hit(results[k], hits[source[k]]);
+  }
+  add_stats(stats, rays.size(), counters);
+}
+
+void PluginBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) const {
+  assert(rays.size() == occluded.size());
+  if (table_.occluded_batch == nullptr) return Backend::occluded(rays, occluded, stats);
+  twinray_ray staged[kBatchChunk];
+  unsigned char results[kBatchChunk];
+  std::size_t source[kBatchChunk];
+  twinray_query_stats counters{};
+  for (std::size_t begin = 0; begin < rays.size(); begin += kBatchChunk) {
+    const std::size_t end = std::min(rays.size(), begin + kBatchChunk);
+    std::size_t count = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      occluded[i] = 0;
+      if (!is_valid_ray(rays[i])) continue;
+      staged[count] = to_plugin_ray(rays[i]);
+      results[count] = 0;
+      source[count++] = i;
+    }
+    if (count == 0) continue;
+    guarded("occluded_batch", [&] { table_.occluded_batch(self_, staged, results, count, &counters); });
+    for (std::size_t k = 0; k < count; ++k) occluded[source[k]] = results[k] != 0 ? 1 : 0;
+  }
+  add_stats(stats, rays.size(), counters);
+}
+
+}  // namespace
+
+std::unique_ptr<Backend> load_plugin_backend(const std::filesystem::path& so) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(so, ec))
+    throw InputError(so, "", "plugin library not found (expected a shared library, e.g. libmybvh.so)");
+  // An absolute path: dlopen would otherwise search the library path for a bare file name.
+  const std::filesystem::path absolute = std::filesystem::absolute(so);
+  dlerror();  // clear any stale message
+  void* handle = dlopen(absolute.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (handle == nullptr) {
+    const char* why = dlerror();
+    throw InputError(so, "", std::string("cannot load it as a shared library: ") + (why != nullptr ? why : "unknown reason"));
+  }
+  auto library = std::make_unique<SharedLibrary>(handle);
+
+  dlerror();
+  void* symbol = dlsym(library->get(), TWINRAY_PLUGIN_ENTRY_SYMBOL);
+  if (symbol == nullptr)
+    throw InputError(so, "",
+                     "does not export " TWINRAY_PLUGIN_ENTRY_SYMBOL " (define it with C linkage and default "
+                     "visibility, see docs/plugin-abi.md)");
+  // POSIX guarantees that a dlsym result can be converted to a function pointer.
+  const auto entry = reinterpret_cast<twinray_plugin_entry_fn>(symbol);
+  const twinray_plugin_v1* table = entry();
+  if (table == nullptr) throw InputError(so, "", TWINRAY_PLUGIN_ENTRY_SYMBOL " returned NULL");
+  if (table->abi_version != TWINRAY_PLUGIN_ABI_VERSION)
+    throw InputError(so, "",
+                     "plugin ABI version mismatch: the plugin was built for version " +
+                         std::to_string(table->abi_version) + ", this twinray implements version " +
+                         std::to_string(TWINRAY_PLUGIN_ABI_VERSION) + " (rebuild it against backends/plugin/twinray_plugin.h)");
+  if (table->name == nullptr || table->name[0] == '\0') throw InputError(so, "", "the plugin table has no name");
+  const std::pair<const char*, bool> required[] = {
+      {"create", table->create != nullptr},         {"destroy", table->destroy != nullptr},
+      {"build", table->build != nullptr},           {"intersect1", table->intersect1 != nullptr},
+      {"occluded1", table->occluded1 != nullptr},
+  };
+  for (const auto& [function, present] : required)
+    if (!present) throw InputError(so, "", std::string("the plugin table leaves the required function '") + function + "' NULL");
+
+  void* self = table->create();
+  if (self == nullptr) throw InputError(so, "", "the plugin's create() returned NULL");
+  return std::make_unique<PluginBackend>(so, std::move(library), *table, self);
+}
+
+}  // namespace twinray
