@@ -1,0 +1,107 @@
+#pragma once
+// Light sources the integrators sample explicitly: emissive triangles, emissive spheres, and the
+// environment, chosen in proportion to their emitted power.
+//
+// Emission is one-sided: a surface emits its radiance only toward the side its geometric normal points
+// to (triangles: the counter-clockwise front; spheres: outward).
+//
+// Sampling strategies (densities are with respect to solid angle at the receiving point `ref`):
+//  - triangle: a point uniform in area, pdf = d^2 / (|cos_light| area);
+//  - sphere seen from outside: a direction uniform in the cone the sphere subtends, pdf = 1 / (2 pi (1 -
+//    cos_max)) -- every such direction hits the sphere, and no sample is wasted on its far side;
+//  - sphere seen from inside (or from its surface): a point uniform in area, as for triangles;
+//  - environment: EnvironmentLight::sample (importance tables, or uniform directions).
+// The choice of light uses a Distribution1D over the lights' power (pi * area * luminance(radiance) for
+// surfaces, pi * R^2 * 4 pi * luminance(average radiance)-ish for the environment, see power estimates in
+// area_lights.cpp). pdf_* functions return exactly the density sample() produced, selection included,
+// which is what the MIS weights need.
+//
+// Spheres only enter this code when the scene has emissive spheres; the environment only when there is one.
+
+#include "core/geometry/hit.h"
+#include "core/lights/environment_light.h"
+#include "core/sampling/distribution_1d.h"
+#include "core/scene/scene.h"
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace twinray {
+
+// Radiance an emissive surface sends toward `toward` (unit, pointing away from the surface), given the
+// surface's geometric normal. Zero on the back side and for non-emissive materials.
+inline glm::vec3 emitted_radiance(const Material& m, const glm::vec3& ng, const glm::vec3& toward) {
+  if (m.type != MaterialType::Emissive) return glm::vec3(0.0f);
+  return ng.x * toward.x + ng.y * toward.y + ng.z * toward.z > 0.0f ? m.radiance : glm::vec3(0.0f);
+}
+
+struct EmissiveTriangle {
+  glm::vec3 p0{0.0f}, e1{0.0f}, e2{0.0f};  // p = p0 + b1 e1 + b2 e2
+  glm::vec3 normal{0.0f};                  // unit geometric normal, cross(e1, e2) direction
+  float area = 0.0f;
+  glm::vec3 radiance{0.0f};
+};
+
+struct EmissiveSphere {
+  glm::vec3 center{0.0f};
+  float radius = 0.0f;
+  glm::vec3 radiance{0.0f};
+};
+
+struct LightSample {
+  glm::vec3 wi{0.0f};        // unit direction from ref toward the light
+  glm::vec3 point{0.0f};     // the sampled point on a surface light (unused for the environment)
+  glm::vec3 normal{0.0f};    // its unit geometric normal
+  glm::vec3 radiance{0.0f};  // radiance arriving at ref along -wi if unoccluded (0 on back sides)
+  float pdf = 0.0f;          // solid angle at ref, light selection included
+  bool is_environment = false;
+};
+
+class LightSampler {
+ public:
+  // `env` may be null; it must outlive the sampler. Lights with zero radiance are ignored.
+  LightSampler(const Scene& scene, const EnvironmentLight* env);
+
+  bool empty() const { return !selection_.has_value(); }
+  std::size_t triangle_count() const { return triangles_.size(); }
+  std::size_t sphere_count() const { return spheres_.size(); }
+  bool has_environment() const { return env_ != nullptr && env_index_ != kNone; }
+
+  // A light sample for receiving point `ref`. u_select picks the light, u the point on it.
+  std::optional<LightSample> sample(const glm::vec3& ref, float u_select, glm::vec2 u) const;
+
+  // Density with which sample(ref, ...) would produce the direction toward `point` on surface light hit
+  // `hit` (geometry and primitive ids); 0 when that primitive is not a sampled light.
+  float pdf_surface(const glm::vec3& ref, const Hit& hit, const glm::vec3& point) const;
+  // Density with which sample() would produce direction `dir` toward the environment.
+  float pdf_environment(const glm::vec3& dir) const;
+
+  // Probability of choosing each light, in sample order: triangles, spheres, environment (for tests).
+  float selection_probability(std::size_t light_index) const;
+  const std::vector<EmissiveTriangle>& triangles() const { return triangles_; }
+  const std::vector<EmissiveSphere>& spheres() const { return spheres_; }
+
+ private:
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+  LightSample sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u) const;
+  LightSample sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u) const;
+  static float sphere_pdf(const EmissiveSphere& sph, const glm::vec3& ref, const glm::vec3& point,
+                          const glm::vec3& normal);
+
+  std::vector<EmissiveTriangle> triangles_;
+  std::vector<EmissiveSphere> spheres_;
+  // Per geometry id: index of the shape's first light in sample order (kNone when it emits nothing).
+  std::vector<std::uint32_t> first_light_of_geom_;
+  const EnvironmentLight* env_ = nullptr;
+  std::uint32_t env_index_ = kNone;
+  std::optional<Distribution1D> selection_;
+};
+
+}  // namespace twinray

@@ -1,0 +1,64 @@
+#include "core/render/path_integrator.h"
+
+#include "core/render/light_transport.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+
+namespace twinray {
+
+glm::vec3 PathIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCounters& counters,
+                                   FirstHitInfo* first) const {
+  const SamplingStrategy strategy = settings_.strategy;
+  glm::vec3 result(0.0f);
+  glm::vec3 throughput(1.0f);
+  float eta_scale = 1.0f;
+  bool prev_delta = true;  // the camera ray is a "delta" start: emission seen directly counts fully
+  float prev_bsdf_pdf = 0.0f;
+  glm::vec3 prev_p(0.0f);
+  Ray ray = camera_ray;
+
+  for (int depth = 1;; ++depth) {
+    Hit hit;
+    ++counters.closest_hit_rays;
+    if (!ctx_.backend->intersect(ray, hit, counters.query_stats())) {
+      result += throughput * escaped_radiance(ctx_, ray.dir, strategy, prev_delta, prev_bsdf_pdf);
+      break;
+    }
+    const SurfacePoint sp = make_surface_point(ctx_, ray, hit);
+    if (depth == 1 && first != nullptr) {
+      first->hit = true;
+      first->normal = glm::dot(sp.ng, sp.wo) >= 0.0f ? sp.ng : -sp.ng;
+      first->albedo = sp.bsdf->albedo();
+      first->depth = hit.t;
+    }
+    result += throughput * surface_emission(ctx_, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
+
+    if (settings_.max_depth >= 0 && depth >= settings_.max_depth) break;
+    if (sp.bsdf->is_black()) break;
+
+    if (!sp.bsdf->is_delta())
+      result += throughput * sample_direct_light(ctx_, sp, strategy, rng, counters);
+
+    const float u_lobe = rng.next_float();
+    const glm::vec2 u(rng.next_float(), rng.next_float());
+    const std::optional<BsdfSample> bs = sp.bsdf->sample(sp.wo, sp.ng, u_lobe, u);
+    if (!bs || max_component(bs->weight) <= 0.0f) break;
+    throughput *= bs->weight;
+    eta_scale *= bs->eta_ti * bs->eta_ti;
+    prev_delta = bs->delta;
+    prev_bsdf_pdf = bs->pdf;
+    prev_p = sp.p;
+    ray = spawn_ray(sp.p, sp.ng, bs->wi);
+
+    if (depth >= settings_.rr_depth) {
+      const float survival = std::min(max_component(throughput) * eta_scale, kMaxSurvival);
+      if (!(rng.next_float() < survival)) break;
+      throughput /= survival;
+    }
+  }
+  return result;
+}
+
+}  // namespace twinray

@@ -1,0 +1,232 @@
+#include "core/render/renderer.h"
+
+#include "core/camera/pinhole_camera.h"
+#include "core/render/direct_integrator.h"
+#include "core/render/path_integrator.h"
+#include "core/render/light_transport.h"
+#include "core/sampling/rng.h"
+#include "core/util/fp_mode.h"
+#include "core/util/progress.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+
+namespace twinray {
+
+std::string_view to_string(IntegratorKind k) { return k == IntegratorKind::Direct ? "direct" : "path"; }
+
+std::string_view to_string(SamplingStrategy s) {
+  switch (s) {
+    case SamplingStrategy::Mis: return "mis";
+    case SamplingStrategy::Bsdf: return "bsdf";
+    case SamplingStrategy::Light: return "light";
+  }
+  return "mis";
+}
+
+std::vector<std::string> RenderFeatures::used() const {
+  std::vector<std::string> out;
+  for (const FeatureNote& n : notes)
+    if (n.used) out.push_back(n.name);
+  return out;
+}
+
+std::vector<std::string> RenderFeatures::left_out() const {
+  std::vector<std::string> out;
+  for (const FeatureNote& n : notes)
+    if (!n.used) out.push_back(n.name + " (" + n.reason + ")");
+  return out;
+}
+
+RenderSetup::RenderSetup(const Scene& scene, const RenderOptions& options, const BackendTraits& backend_traits)
+    : scene_(&scene), options_(options) {
+  RenderFeatures& f = features_;
+  environment_ = EnvironmentLight::create(scene.environment, options.env_importance_sampling);
+  f.environment = environment_ != nullptr;
+  f.env_sampling_tables = environment_ && environment_->has_sampling_tables();
+
+  const bool wants_light_sampling = options.settings.strategy != SamplingStrategy::Bsdf;
+  if (wants_light_sampling && (scene.has_emitters() || environment_)) {
+    lights_.emplace(scene, environment_.get());
+    if (lights_->empty()) lights_.reset();
+  }
+  f.light_sampler = lights_.has_value();
+  f.triangle_light_count = lights_ ? lights_->triangle_count() : 0;
+  f.sphere_light_count = lights_ ? lights_->sphere_count() : 0;
+  f.sphere_lights = f.sphere_light_count > 0;
+  f.sphere_geometry = scene.geometry.has_spheres();
+  f.traversal_cost = options.aux.cost && backend_traits.counts_traversal;
+
+  auto note = [&f](std::string name, bool used, std::string reason) {
+    f.notes.push_back({std::move(name), used, used ? std::string() : std::move(reason)});
+  };
+  note("environment", f.environment, "no environment");
+  if (!f.environment) {
+    note("env sampling tables", false, "no environment");
+  } else if (environment_->is_constant()) {
+    note("env sampling tables", false, "constant environment needs none");
+  } else {
+    note("env sampling tables", f.env_sampling_tables, "uniform environment sampling requested");
+  }
+  if (!wants_light_sampling) {
+    note("light sampling", false, "bsdf-only strategy");
+  } else {
+    note("light sampling", f.light_sampler, "no emitters");
+  }
+  note("sphere code paths", f.sphere_geometry, "no spheres");
+  if (f.sphere_geometry) note("sphere light sampling", f.sphere_lights, "no emissive spheres");
+  if (options.aux.cost)
+    note("traversal cost", f.traversal_cost, "backend does not count traversal");
+}
+
+std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const SceneContext& ctx,
+                                            const IntegratorSettings& settings) {
+  if (kind == IntegratorKind::Direct) return std::make_unique<DirectIntegrator>(ctx, settings);
+  return std::make_unique<PathIntegrator>(ctx, settings);
+}
+
+namespace {
+
+struct Tile {
+  int x0, y0, x1, y1;
+};
+
+std::vector<Tile> make_tiles(int width, int height, int size) {
+  std::vector<Tile> tiles;
+  for (int y = 0; y < height; y += size)
+    for (int x = 0; x < width; x += size)
+      tiles.push_back({x, y, std::min(x + size, width), std::min(y + size, height)});
+  return tiles;
+}
+
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Tallies of one tile, merged under a mutex once per tile (never per sample).
+struct TileTally {
+  TraceCounters counters;
+  std::uint64_t samples = 0;
+  std::uint64_t nonfinite = 0;
+  std::uint64_t negative = 0;
+};
+
+void render_tile(const Tile& tile, int sample_begin, int sample_end, const PinholeCamera& camera,
+                 const Integrator& integrator, std::uint64_t seed, Film& film, TileTally& tally) {
+  const bool want_first = film.aux().normals || film.aux().albedo || film.aux().depth;
+  const auto width = static_cast<std::uint64_t>(film.width());
+  for (int y = tile.y0; y < tile.y1; ++y) {
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      const std::uint64_t pixel_index = static_cast<std::uint64_t>(y) * width + static_cast<std::uint64_t>(x);
+      const auto idx = static_cast<std::size_t>(pixel_index);
+      Film::PixelSums& px = film.pixel(idx);
+      for (int s = sample_begin; s < sample_end; ++s) {
+        Rng rng = Rng::keyed(seed, pixel_index, static_cast<std::uint64_t>(s));
+        const float jx = rng.next_float(), jy = rng.next_float();
+        const Ray ray = camera.generate_ray((static_cast<float>(x) + jx) / static_cast<float>(camera.width()),
+                                            1.0f - (static_cast<float>(y) + jy) / static_cast<float>(camera.height()));
+        const QueryStats before = tally.counters.query;
+        const std::uint64_t rays_before = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
+        FirstHitInfo first;
+        glm::vec3 L = integrator.radiance(ray, rng, tally.counters, want_first ? &first : nullptr);
+        if (!finite3(L)) {
+          L = glm::vec3(0.0f);
+          ++tally.nonfinite;
+        } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
+          L = glm::max(L, glm::vec3(0.0f));
+          ++tally.negative;
+        }
+        const glm::dvec3 Ld(L);
+        px.sum += Ld;
+        px.sum_sq += Ld * Ld;
+        ++px.samples;
+        ++tally.samples;
+        if (glm::dvec3* n = film.normal_sum(idx); n && first.hit) *n += glm::dvec3(first.normal);
+        if (glm::dvec3* a = film.albedo_sum(idx); a && first.hit) *a += glm::dvec3(first.albedo);
+        if (double* d = film.depth_sum(idx); d && first.hit) {
+          *d += static_cast<double>(first.depth);
+          ++*film.depth_hit_count(idx);
+        }
+        if (glm::dvec3* c = film.cost_sum(idx)) {
+          const QueryStats& after = tally.counters.query;
+          const std::uint64_t rays_after = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
+          *c += glm::dvec3(static_cast<double>(after.nodes_visited - before.nodes_visited),
+                           static_cast<double>(after.primitives_tested - before.primitives_tested),
+                           static_cast<double>(rays_after - rays_before));
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+RenderResult render(const RenderSetup& setup, const Backend& backend) {
+  const RenderOptions& opt = setup.options();
+  const Scene& scene = setup.scene();
+  const PinholeCamera camera(scene.camera);
+  const SceneContext ctx = SceneContext::make(scene, backend, setup.environment(), setup.lights());
+  const std::unique_ptr<Integrator> integrator = make_integrator(opt.integrator, ctx, opt.settings);
+
+  AuxChannels aux = opt.aux;
+  aux.cost = setup.features().traversal_cost;
+  RenderResult result{Film(camera.width(), camera.height(), aux), RenderStats{}};
+  const std::vector<Tile> tiles = make_tiles(camera.width(), camera.height(), std::max(1, opt.tile_size));
+
+  std::mutex merge_mutex;
+  RenderStats& stats = result.stats;
+  auto run_pass = [&](int sample_begin, int sample_end, Progress* progress) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      ScopedFlushDenormals ftz;
+      for (std::size_t t = r.begin(); t != r.end(); ++t) {
+        TileTally tally;
+        tally.counters.collect_query_stats = aux.cost;
+        render_tile(tiles[t], sample_begin, sample_end, camera, *integrator, opt.seed, result.film, tally);
+        {
+          std::lock_guard lock(merge_mutex);
+          stats.samples += tally.samples;
+          stats.closest_hit_rays += tally.counters.closest_hit_rays;
+          stats.shadow_rays += tally.counters.shadow_rays;
+          stats.nonfinite_samples += tally.nonfinite;
+          stats.negative_samples += tally.negative;
+          stats.query += tally.counters.query;
+        }
+        if (progress) progress->advance();
+      }
+    });
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  if (opt.time_budget_seconds > 0.0) {
+    // Passes of one sample per pixel; the progress line counts time, the ETA is the rest of the budget.
+    constexpr std::uint64_t kProgressSteps = 1000;
+    std::optional<Progress> progress;
+    if (opt.show_progress) progress.emplace("render", kProgressSteps);
+    std::uint64_t shown = 0;
+    int pass = 0;
+    do {
+      run_pass(pass, pass + 1, nullptr);
+      ++pass;
+      const auto target = static_cast<std::uint64_t>(
+          std::min(1.0, elapsed() / opt.time_budget_seconds) * static_cast<double>(kProgressSteps));
+      if (progress && target > shown) {
+        progress->advance(target - shown);
+        shown = target;
+      }
+    } while (elapsed() < opt.time_budget_seconds);
+    stats.spp = pass;
+  } else {
+    std::optional<Progress> progress;
+    if (opt.show_progress) progress.emplace("render", tiles.size());
+    run_pass(0, std::max(0, opt.spp), progress ? &*progress : nullptr);
+    stats.spp = std::max(0, opt.spp);
+  }
+  stats.seconds = elapsed();
+  return result;
+}
+
+}  // namespace twinray
