@@ -1,0 +1,48 @@
+#pragma once
+// The hand-written BVH backend: binned SAH tree (bvh_builder.h) over a leaf-ordered private copy of the
+// geometry (primitive_store.h), traversed by bvh_traversal.h. name() == "bvh".
+
+#include "backends/bvh/bvh_build_options.h"
+#include "backends/bvh/bvh_node.h"
+#include "backends/bvh/primitive_store.h"
+#include "core/backend/backend.h"
+
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace twinray {
+
+class BvhBackend final : public Backend {
+ public:
+  explicit BvhBackend(const BvhBuildOptions& options = {});  // throws std::invalid_argument on bad options
+
+  std::string_view name() const override { return "bvh"; }
+  BackendTraits traits() const override { return {.counts_traversal = true, .honours_ties = true, .watertight = true}; }
+
+  void build(const SceneGeometry& geometry) override;
+  BuildStats build_stats() const override { return stats_; }
+
+  bool intersect(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const override;
+  bool occluded(const Ray& ray, QueryStats* stats = nullptr) const override;
+  using Backend::intersect;
+  using Backend::occluded;
+
+  // Read-only access to the tree, for tests and tools.
+  const BvhBuildOptions& options() const { return options_; }
+  std::span<const BvhNode> nodes() const { return nodes_; }
+  const PrimitiveStore& primitives() const { return prims_; }
+
+ private:
+  enum class Kinds { None, Triangles, Spheres, Mixed };
+
+  BvhBuildOptions options_;
+  std::vector<BvhNode> nodes_;
+  PrimitiveStore prims_;
+  Kinds kinds_ = Kinds::None;
+  BuildStats stats_;
+};
+
+std::unique_ptr<twinray::Backend> make_bvh_backend(const BvhBuildOptions& options = {});
+
+}  // namespace twinray

@@ -1,0 +1,201 @@
+#pragma once
+// Closest-hit and any-hit traversal of the flat BVH.
+//
+// Ordered depth-first traversal: at an interior node both children's boxes are tested, the nearer child is
+// visited first and the farther one pushed with its entry distance; popped entries that start beyond the
+// current closest hit are skipped without touching their node. The interval [tmin, best t] shrinks as hits
+// are found and stays closed, so an equidistant hit in another subtree still reaches `precedes` and the
+// winner does not depend on the visiting order: the result is bit-identical to the brute-force loop.
+//
+// The traversal is a template on the primitive kinds present, so a triangle-only scene runs a loop that
+// contains no sphere code at all (and vice versa); a mixed scene branches once per leaf.
+
+#include "backends/bvh/bvh_node.h"
+#include "backends/bvh/primitive_store.h"
+#include "backends/bvh/ray_box.h"
+#include "core/backend/backend.h"
+#include "core/geometry/hit.h"
+#include "core/geometry/ray.h"
+#include "core/intersect/sphere_robust.h"
+#include "core/intersect/triangle_watertight.h"
+
+#include <cstdint>
+#include <span>
+
+namespace twinray {
+
+struct BvhView {
+  std::span<const BvhNode> nodes;
+  const PrimitiveStore* prims;
+};
+
+namespace bvh_detail {
+
+struct StackEntry {
+  std::uint32_t node;
+  float entry;  // where the ray enters the node's box
+};
+
+// Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
+inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
+  while (size > 0) {
+    const StackEntry& e = stack[--size];
+    if (e.entry <= tmax) {
+      node = e.node;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
+inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
+                    float tmax, StackEntry* stack, std::size_t& size, std::uint32_t& next) {
+  const std::uint32_t left = index + 1;
+  const std::uint32_t right = nodes[index].second_child();
+  float entry_left = 0.0f, entry_right = 0.0f;
+  const bool hit_left = intersect_box(nodes[left], box_ray, tmin, tmax, entry_left);
+  const bool hit_right = intersect_box(nodes[right], box_ray, tmin, tmax, entry_right);
+  if (hit_left && hit_right) {
+    const bool left_first = entry_left <= entry_right;
+    stack[size++] = left_first ? StackEntry{right, entry_right} : StackEntry{left, entry_left};
+    next = left_first ? left : right;
+  } else if (hit_left || hit_right) {
+    next = hit_left ? left : right;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace bvh_detail
+
+// Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
+template <bool kTriangles, bool kSpheres>
+bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  using namespace bvh_detail;
+  hit = Hit{};
+  if (bvh.nodes.empty()) return false;
+  const BoxRay box_ray(ray);
+  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  StackEntry stack[kBvhMaxDepth];
+  std::size_t size = 0;
+  std::uint64_t nodes_visited = 1, prims_tested = 0;
+  float tmax = ray.tmax;          // shrinks to the best hit's t
+  bool best_is_sphere = false;
+  std::uint32_t best_index = 0;   // into the store's array of the best hit's kind
+
+  float root_entry = 0.0f;
+  std::uint32_t index = 0;
+  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
+  while (more) {
+    const BvhNode& node = bvh.nodes[index];
+    if (!node.is_leaf()) {
+      nodes_visited += 2;
+      more = descend(bvh.nodes, index, box_ray, ray.tmin, tmax, stack, size, index) ||
+             pop_next(stack, size, tmax, index);
+      continue;
+    }
+    const std::uint32_t first = node.first_prim(), count = node.prim_count();
+    prims_tested += count;
+    if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
+      for (std::uint32_t i = first; i < first + count; ++i) {
+        const StoredTriangle& tri = prims.triangles[i];
+        float t, u, v;
+        if (!intersect_triangle(tri_ray, tri.p0, tri.p1, tri.p2, ray.tmin, tmax, t, u, v)) continue;
+        const PrimitiveKey key = prims.triangle_keys[i];
+        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
+        hit.t = tmax = t;
+        hit.u = u;
+        hit.v = v;
+        hit.geom_id = key.geom_id;
+        hit.prim_id = key.prim_id;
+        best_is_sphere = false;
+        best_index = i;
+      }
+    } else if constexpr (kSpheres) {
+      for (std::uint32_t i = first; i < first + count; ++i) {
+        const StoredSphere& s = prims.spheres[i];
+        float t;
+        if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
+        const PrimitiveKey key = prims.sphere_keys[i];
+        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
+        hit.t = tmax = t;
+        hit.geom_id = key.geom_id;
+        hit.prim_id = key.prim_id;
+        best_is_sphere = true;
+        best_index = i;
+      }
+    }
+    more = pop_next(stack, size, tmax, index);
+  }
+
+  if (stats) {
+    stats->nodes_visited += nodes_visited;
+    stats->primitives_tested += prims_tested;
+  }
+  if (!hit.found()) return false;
+  if (kSpheres && best_is_sphere) {
+    const StoredSphere& s = prims.spheres[best_index];
+    sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
+  } else if constexpr (kTriangles) {
+    const StoredTriangle& tri = prims.triangles[best_index];
+    hit.ng = triangle_geometric_normal(tri.p0, tri.p1, tri.p2);
+  }
+  return true;
+}
+
+// Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
+template <bool kTriangles, bool kSpheres>
+bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  using namespace bvh_detail;
+  if (bvh.nodes.empty()) return false;
+  const BoxRay box_ray(ray);
+  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  StackEntry stack[kBvhMaxDepth];
+  std::size_t size = 0;
+  std::uint64_t nodes_visited = 1, prims_tested = 0;
+  bool found = false;
+
+  float root_entry = 0.0f;
+  std::uint32_t index = 0;
+  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
+  while (more && !found) {
+    const BvhNode& node = bvh.nodes[index];
+    if (!node.is_leaf()) {
+      nodes_visited += 2;
+      more = descend(bvh.nodes, index, box_ray, ray.tmin, ray.tmax, stack, size, index) ||
+             pop_next(stack, size, ray.tmax, index);
+      continue;
+    }
+    const std::uint32_t first = node.first_prim(), count = node.prim_count();
+    if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
+      for (std::uint32_t i = first; i < first + count && !found; ++i) {
+        ++prims_tested;
+        const StoredTriangle& tri = prims.triangles[i];
+        float t, u, v;
+        found = intersect_triangle(tri_ray, tri.p0, tri.p1, tri.p2, ray.tmin, ray.tmax, t, u, v);
+      }
+    } else if constexpr (kSpheres) {
+      for (std::uint32_t i = first; i < first + count && !found; ++i) {
+        ++prims_tested;
+        const StoredSphere& s = prims.spheres[i];
+        float t;
+        found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
+      }
+    }
+    more = pop_next(stack, size, ray.tmax, index);
+  }
+
+  if (stats) {
+    stats->nodes_visited += nodes_visited;
+    stats->primitives_tested += prims_tested;
+  }
+  return found;
+}
+
+}  // namespace twinray

@@ -1,0 +1,176 @@
+#pragma once
+// Watertight ray-triangle intersection.
+//
+// Method: Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT 2(1), 2013.
+// The ray is made the +z axis of a sheared frame (a permutation, so that the largest direction component
+// becomes z, then a shear that maps the direction to (0,0,1)). Triangle vertices are transformed into that
+// frame and the hit test becomes a 2D point-in-triangle test of the origin with the three edge functions
+//     U = cross2(C, B),  V = cross2(A, C),  W = cross2(B, A)     (A, B, C = sheared p0, p1, p2)
+// Why it is watertight: a vertex's sheared coordinates depend only on the vertex and the ray, so two triangles
+// sharing an edge evaluate that edge's function from bit-identical numbers, in opposite order: the two
+// float results are exact negations. And fl(x*y) - fl(z*w) has the sign of x*y - z*w or is zero, because
+// rounding is monotonic. So a non-zero float edge function always has the exact sign, and only an exact 0
+// is ambiguous: then all three are recomputed in double, where products of floats are exact and the sign
+// of the difference is exact too.
+//
+// Edge ownership (never counted twice): the paper accepts a 0 edge function for both triangles of an edge.
+// We add a fill rule so that a ray exactly through a shared edge or vertex hits exactly one triangle of a
+// consistently oriented mesh: an edge whose function is exactly 0 only includes the origin when its
+// direction, oriented so that the triangle lies on its right, satisfies  d.y > 0 || (d.y == 0 && d.x > 0).
+// That is the same as moving the origin by an infinitesimal (eps, -eps^2) in the sheared plane before
+// testing: a single perturbed point lies in exactly one triangle of a fan or of an edge pair, so ownership
+// is unique, and it is decided from the same bit-identical vertex coordinates on both sides. (At a
+// silhouette edge, where both triangles project to the same side, both or neither are hit, which keeps
+// the inside/outside parity of a closed mesh.)
+//
+// Conventions:
+//  - No backface culling; the winding only decides the sign of the determinant.
+//  - A hit counts when tmin <= t <= tmax (closed, core/geometry/ray.h), with t the reported float.
+//  - Determinant exactly 0 (ray parallel to the triangle's plane, ray lying in the plane, or a triangle
+//    whose projection is a segment) is a miss: there is no single crossing point to report.
+//  - +0 and -0 direction components: the largest |dir| component is the divisor, and it is non-zero for
+//    every valid ray, so the shear constants are finite; signed zeros only flow into products.
+//  - Barycentrics: u = weight of p1, v = weight of p2 (core/geometry/hit.h).
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/vec3.hpp>
+
+#include <cmath>
+#include <cstdint>
+
+namespace twinray {
+
+// Everything about the ray the triangle test needs, computed once per ray.
+struct TriangleRay {
+  int kx = 0, ky = 1, kz = 2;  // permutation: kz = axis of the largest |dir| component
+  float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
+  float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
+};
+
+inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir) {
+  TriangleRay r;
+  const glm::vec3 a = glm::abs(dir);
+  r.kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+  r.kx = r.kz == 2 ? 0 : r.kz + 1;
+  r.ky = r.kx == 2 ? 0 : r.kx + 1;
+  // Looking down a negative axis mirrors the 2D frame; swapping x and y restores the handedness, so the
+  // determinant keeps one sign convention for every ray.
+  if (dir[r.kz] < 0.0f) {
+    const int tmp = r.kx;
+    r.kx = r.ky;
+    r.ky = tmp;
+  }
+  r.sx = dir[r.kx] / dir[r.kz];
+  r.sy = dir[r.ky] / dir[r.kz];
+  r.sz = 1.0f / dir[r.kz];
+  r.ox = org[r.kx];
+  r.oy = org[r.ky];
+  r.oz = org[r.kz];
+  return r;
+}
+
+namespace triangle_detail {
+
+// Returns x after forcing it to be rounded to float in a register. GCC contracts a*b - c*d into an FMA
+// by default under -march=native (even in ISO mode), and a fused product is not rounded: fma(a, b, -fl(c*d))
+// and fma(c, d, -fl(a*b)) are no longer exact negations and can disagree in sign, which would reopen
+// the cracks this algorithm closes. Every product below goes through it, so the result is the same
+// IEEE float computation wherever the function is inlined: the sheared coordinates of a shared vertex are
+// identical for all its triangles, and the bvh and brute backends report bit-identical t, u, v.
+// The empty asm costs no instruction; it only hides the value from the optimizer.
+inline float rounded(float x) {
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+  asm("" : "+x"(x));
+#elif defined(__GNUC__) && defined(__aarch64__)
+  asm("" : "+w"(x));
+#endif
+  return x;
+}
+
+// Whether a zero edge function still includes the origin (fill rule above). (ex, ey) is the edge as stored,
+// `positive` tells whether the triangle lies on its right (determinant > 0) or its left.
+inline bool owns_edge(float ex, float ey, bool positive) {
+  if (!positive) {
+    ex = -ex;
+    ey = -ey;
+  }
+  return ey > 0.0f || (ey == 0.0f && ex > 0.0f);
+}
+
+}  // namespace triangle_detail
+
+// Intersects the ray with triangle (p0, p1, p2). On a hit with tmin <= t <= tmax, writes t and the
+// barycentrics (u for p1, v for p2) and returns true.
+inline bool intersect_triangle(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
+                               float tmin, float tmax, float& t_out, float& u_out, float& v_out) {
+  using triangle_detail::rounded;
+  // Vertices relative to the origin, permuted. value_ptr views a vertex as float[3] (GLM guarantees the
+  // layout), so a component is one indexed load; glm's operator[] would be a switch per access.
+  const float* q0 = glm::value_ptr(p0);
+  const float* q1 = glm::value_ptr(p1);
+  const float* q2 = glm::value_ptr(p2);
+  const float a_z = q0[ray.kz] - ray.oz;
+  const float b_z = q1[ray.kz] - ray.oz;
+  const float c_z = q2[ray.kz] - ray.oz;
+  const float ax = (q0[ray.kx] - ray.ox) - rounded(ray.sx * a_z);
+  const float ay = (q0[ray.ky] - ray.oy) - rounded(ray.sy * a_z);
+  const float bx = (q1[ray.kx] - ray.ox) - rounded(ray.sx * b_z);
+  const float by = (q1[ray.ky] - ray.oy) - rounded(ray.sy * b_z);
+  const float cx = (q2[ray.kx] - ray.ox) - rounded(ray.sx * c_z);
+  const float cy = (q2[ray.ky] - ray.oy) - rounded(ray.sy * c_z);
+
+  float u = rounded(cx * by) - rounded(cy * bx);
+  float v = rounded(ax * cy) - rounded(ay * cx);
+  float w = rounded(bx * ay) - rounded(by * ax);
+  if (u == 0.0f || v == 0.0f || w == 0.0f) {
+    // Exact in double: each product of two floats fits in 48 bits, and the difference is rounded once,
+    // which preserves its sign (and contraction into an FMA cannot change an exact product).
+    const double du = double(cx) * double(by) - double(cy) * double(bx);
+    const double dv = double(ax) * double(cy) - double(ay) * double(cx);
+    const double dw = double(bx) * double(ay) - double(by) * double(ax);
+    // Signs are decided in double below; the float copies only feed t and the barycentrics, where a
+    // magnitude that underflows to 0 is harmless.
+    if ((du < 0.0 || dv < 0.0 || dw < 0.0) && (du > 0.0 || dv > 0.0 || dw > 0.0)) return false;
+    const bool positive = du + dv + dw > 0.0;
+    if (du == 0.0 && !triangle_detail::owns_edge(cx - bx, cy - by, positive)) return false;
+    if (dv == 0.0 && !triangle_detail::owns_edge(ax - cx, ay - cy, positive)) return false;
+    if (dw == 0.0 && !triangle_detail::owns_edge(bx - ax, by - ay, positive)) return false;
+    u = static_cast<float>(du);
+    v = static_cast<float>(dv);
+    w = static_cast<float>(dw);
+  } else if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) {
+    return false;
+  }
+
+  const float det = u + v + w;
+  if (det == 0.0f) return false;  // parallel, in-plane or projected to a segment: see conventions above
+
+  const float az = ray.sz * a_z;
+  const float bz = ray.sz * b_z;
+  const float cz = ray.sz * c_z;
+  const float inv_det = 1.0f / det;
+  const float t = (rounded(u * az) + rounded(v * bz) + rounded(w * cz)) * inv_det;
+  // Written so that a NaN t (overflowing coordinates) fails and never becomes a hit.
+  if (!(t >= tmin && t <= tmax)) return false;
+  t_out = t;
+  u_out = v * inv_det;
+  v_out = w * inv_det;
+  return true;
+}
+
+// normalize(cross(p1 - p0, p2 - p0)), evaluated in double so that tiny (but hit) triangles, whose float
+// cross product would underflow, still get a unit normal. A triangle whose vertices are exactly collinear
+// cannot be hit (its determinant is 0), so the fallback only guards against misuse.
+inline glm::vec3 triangle_geometric_normal(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  const double e1x = double(p1.x) - p0.x, e1y = double(p1.y) - p0.y, e1z = double(p1.z) - p0.z;
+  const double e2x = double(p2.x) - p0.x, e2y = double(p2.y) - p0.y, e2z = double(p2.z) - p0.z;
+  const double nx = e1y * e2z - e1z * e2y;
+  const double ny = e1z * e2x - e1x * e2z;
+  const double nz = e1x * e2y - e1y * e2x;
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
+  return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
+}
+
+}  // namespace twinray

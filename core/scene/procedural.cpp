@@ -1,0 +1,177 @@
+#include "core/scene/procedural.h"
+
+#include "core/sampling/rng.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <utility>
+
+namespace twinray {
+
+namespace {
+
+// Embree reads vertex buffers with 16-byte loads: keep at least one spare vertex of capacity
+// (SceneGeometry invariant).
+void reserve_spare_vertex(TriangleMesh& mesh) { mesh.positions.reserve(mesh.positions.size() + 1); }
+
+glm::vec3 uniform_in_cube(Rng& rng, float half_extent) {
+  const float x = rng.next_float(), y = rng.next_float(), z = rng.next_float();
+  return half_extent * (2.0f * glm::vec3(x, y, z) - 1.0f);
+}
+
+// Twice the triangle area relative to its longest edge squared: a scale-free measure of how thin it is.
+float thinness(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+  const float area2 = glm::length(glm::cross(p1 - p0, p2 - p0));
+  const float e = std::max({glm::dot(p1 - p0, p1 - p0), glm::dot(p2 - p1, p2 - p1), glm::dot(p0 - p2, p0 - p2)});
+  return e > 0.0f ? area2 / e : 0.0f;
+}
+
+TriangleMesh make_triangle_soup(std::size_t n, Rng& rng, std::uint32_t geom_id) {
+  constexpr float kSpread = 0.15f;
+  // Rejecting slivers keeps the soup free of (near-)degenerate triangles, which the loaders would drop.
+  constexpr float kMinThinness = 0.01f;
+  TriangleMesh mesh;
+  mesh.geom_id = geom_id;
+  mesh.positions.reserve(3 * n + 1);
+  mesh.indices.reserve(n);
+  while (mesh.indices.size() < n) {
+    const glm::vec3 c = uniform_in_cube(rng, 1.0f - kSpread);
+    const glm::vec3 p0 = c + uniform_in_cube(rng, kSpread);
+    const glm::vec3 p1 = c + uniform_in_cube(rng, kSpread);
+    const glm::vec3 p2 = c + uniform_in_cube(rng, kSpread);
+    if (thinness(p0, p1, p2) < kMinThinness) continue;
+    const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), {p0, p1, p2});
+    mesh.indices.emplace_back(base, base + 1, base + 2);
+  }
+  reserve_spare_vertex(mesh);
+  return mesh;
+}
+
+Sphere make_random_sphere(Rng& rng, std::uint32_t geom_id) {
+  Sphere s;
+  s.geom_id = geom_id;
+  s.center = uniform_in_cube(rng, 1.0f);
+  s.radius = 0.02f + 0.1f * rng.next_float();
+  return s;
+}
+
+TriangleMesh make_icosphere(const glm::vec3& center, float radius, int subdivisions, std::uint32_t geom_id) {
+  // Unit-sphere directions are refined in double and rounded once at the end, so a shared vertex gets one
+  // position no matter which face created it (it is created only once anyway: see `midpoint`).
+  using DVec = std::array<double, 3>;
+  const double g = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<DVec> dirs = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                            {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  // Counter-clockwise seen from outside.
+  std::vector<std::array<std::uint32_t, 3>> faces = {
+      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  const auto normalized = [](const DVec& v) {
+    const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    return DVec{v[0] / len, v[1] / len, v[2] / len};
+  };
+  for (DVec& d : dirs) d = normalized(d);
+
+  for (int level = 0; level < subdivisions; ++level) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> midpoints;
+    const auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      const auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      const DVec& pa = dirs[a];
+      const DVec& pb = dirs[b];
+      dirs.push_back(normalized({pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]}));
+      const auto id = static_cast<std::uint32_t>(dirs.size() - 1);
+      midpoints.emplace(key, id);
+      return id;
+    };
+    std::vector<std::array<std::uint32_t, 3>> refined;
+    refined.reserve(4 * faces.size());
+    for (const auto& f : faces) {
+      const std::uint32_t ab = midpoint(f[0], f[1]), bc = midpoint(f[1], f[2]), ca = midpoint(f[2], f[0]);
+      refined.push_back({f[0], ab, ca});
+      refined.push_back({f[1], bc, ab});
+      refined.push_back({f[2], ca, bc});
+      refined.push_back({ab, bc, ca});
+    }
+    faces = std::move(refined);
+  }
+
+  TriangleMesh mesh;
+  mesh.geom_id = geom_id;
+  mesh.positions.reserve(dirs.size() + 1);
+  for (const DVec& d : dirs)
+    mesh.positions.emplace_back(static_cast<float>(center.x + radius * d[0]),
+                                static_cast<float>(center.y + radius * d[1]),
+                                static_cast<float>(center.z + radius * d[2]));
+  mesh.indices.reserve(faces.size());
+  for (const auto& f : faces) mesh.indices.emplace_back(f[0], f[1], f[2]);
+  return mesh;
+}
+
+}  // namespace
+
+SceneGeometry tessellated_sphere(const glm::vec3& center, float radius, int subdivisions) {
+  SceneGeometry g;
+  g.meshes.push_back(make_icosphere(center, radius, subdivisions, 0));
+  return g;
+}
+
+SceneGeometry random_triangle_soup(std::size_t n, std::uint64_t seed) {
+  Rng rng(seed, 1);
+  SceneGeometry g;
+  g.meshes.push_back(make_triangle_soup(n, rng, 0));
+  return g;
+}
+
+SceneGeometry grid_mesh(int nx, int ny) {
+  TriangleMesh mesh;
+  mesh.geom_id = 0;
+  const auto vertex = [nx](int i, int j) { return static_cast<std::uint32_t>(j * (nx + 1) + i); };
+  mesh.positions.reserve(static_cast<std::size_t>((nx + 1) * (ny + 1) + 1));
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) mesh.positions.emplace_back(static_cast<float>(i), static_cast<float>(j), 0.0f);
+  mesh.indices.reserve(static_cast<std::size_t>(2 * nx * ny));
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const std::uint32_t v00 = vertex(i, j), v10 = vertex(i + 1, j), v01 = vertex(i, j + 1),
+                          v11 = vertex(i + 1, j + 1);
+      if ((i + j) % 2 == 0) {  // diagonal v00-v11
+        mesh.indices.emplace_back(v00, v10, v11);
+        mesh.indices.emplace_back(v00, v11, v01);
+      } else {  // diagonal v10-v01
+        mesh.indices.emplace_back(v00, v10, v01);
+        mesh.indices.emplace_back(v10, v11, v01);
+      }
+    }
+  }
+  SceneGeometry g;
+  g.meshes.push_back(std::move(mesh));
+  return g;
+}
+
+SceneGeometry random_spheres(std::size_t n, std::uint64_t seed) {
+  Rng rng(seed, 2);
+  SceneGeometry g;
+  g.spheres.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) g.spheres.push_back(make_random_sphere(rng, static_cast<std::uint32_t>(k)));
+  return g;
+}
+
+SceneGeometry mixed_spheres_and_triangles(std::size_t n_spheres, std::size_t n_triangles, std::uint64_t seed) {
+  Rng rng(seed, 3);
+  SceneGeometry g;
+  g.meshes.push_back(make_triangle_soup(n_triangles, rng, 0));
+  for (std::size_t k = 0; k < n_spheres; ++k)
+    g.spheres.push_back(make_random_sphere(rng, static_cast<std::uint32_t>(k + 1)));
+  g.meshes.push_back(make_icosphere(glm::vec3(0.0f), 0.5f, 3, static_cast<std::uint32_t>(n_spheres + 1)));
+  return g;
+}
+
+}  // namespace twinray

@@ -1,0 +1,231 @@
+// Structural invariants of the BVH built by backends/bvh: node layout, containment, leaf sizes, primitive
+// coverage, kind separation, depth cap and SAH quality against an object-median build.
+
+#include "backends/bvh/bvh_backend.h"
+#include "core/scene/procedural.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace twinray {
+namespace {
+
+struct NamedScene {
+  std::string name;
+  SceneGeometry geometry;
+};
+
+std::vector<NamedScene> test_scenes() {
+  std::vector<NamedScene> scenes;
+  scenes.push_back({"soup", random_triangle_soup(4000, 11)});
+  scenes.push_back({"tessellated sphere", tessellated_sphere(glm::vec3(1.0f, 2.0f, 3.0f), 2.0f, 4)});
+  scenes.push_back({"grid", grid_mesh(40, 30)});
+  scenes.push_back({"spheres", random_spheres(600, 12)});
+  scenes.push_back({"mixed", mixed_spheres_and_triangles(300, 1500, 13)});
+  return scenes;
+}
+
+Bounds3 node_bounds(const BvhNode& n) { return {n.lo, n.hi}; }
+
+// Walks the tree from the root, checking what must hold at every node, and records every primitive key
+// found in a leaf.
+struct TreeChecker {
+  const BvhBackend& bvh;
+  const SceneGeometry& geometry;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> seen;  // (geom_id, prim_id) -> leaves holding it
+  std::size_t reached = 0, leaves = 0, max_depth = 0;
+
+  Bounds3 primitive_bounds(const PrimitiveKey& key, bool sphere) const {
+    if (sphere) {
+      for (const Sphere& s : geometry.spheres)
+        if (s.geom_id == key.geom_id) return s.bounds();
+    } else {
+      for (const TriangleMesh& m : geometry.meshes) {
+        if (m.geom_id != key.geom_id) continue;
+        const glm::uvec3 tri = m.indices.at(key.prim_id);
+        Bounds3 b = Bounds3::of_point(m.positions[tri.x]);
+        b.extend(m.positions[tri.y]);
+        b.extend(m.positions[tri.z]);
+        return b;
+      }
+    }
+    ADD_FAILURE() << "key (" << key.geom_id << ", " << key.prim_id << ") names no primitive";
+    return {};
+  }
+
+  void visit(std::uint32_t index, std::size_t depth) {
+    const std::span<const BvhNode> nodes = bvh.nodes();
+    ASSERT_LT(index, nodes.size());
+    ++reached;
+    max_depth = std::max(max_depth, depth);
+    ASSERT_LT(depth, kBvhMaxDepth);
+    const BvhNode& node = nodes[index];
+    if (!node.is_leaf()) {
+      const std::uint32_t left = index + 1, right = node.second_child();
+      ASSERT_GT(right, left);  // depth-first: the second child follows the whole first subtree
+      EXPECT_TRUE(node_bounds(node).contains(node_bounds(nodes[left]))) << "node " << index;
+      EXPECT_TRUE(node_bounds(node).contains(node_bounds(nodes[right]))) << "node " << index;
+      visit(left, depth + 1);
+      visit(right, depth + 1);
+      return;
+    }
+    ++leaves;
+    const std::uint32_t count = node.prim_count();
+    EXPECT_GE(count, 1u);
+    EXPECT_LE(count, static_cast<std::uint32_t>(bvh.options().max_leaf_size)) << "leaf " << index;
+    const bool sphere = node.is_sphere_leaf();
+    const PrimitiveStore& store = bvh.primitives();
+    const std::vector<PrimitiveKey>& keys = sphere ? store.sphere_keys : store.triangle_keys;
+    ASSERT_LE(std::size_t{node.first_prim()} + count, keys.size());
+    for (std::uint32_t i = node.first_prim(); i < node.first_prim() + count; ++i) {
+      ++seen[{keys[i].geom_id, keys[i].prim_id}];
+      EXPECT_TRUE(node_bounds(node).contains(primitive_bounds(keys[i], sphere))) << "leaf " << index;
+    }
+  }
+};
+
+void check_tree(const SceneGeometry& geometry, const BvhBuildOptions& options, const std::string& name) {
+  SCOPED_TRACE(name);
+  BvhBackend bvh(options);
+  bvh.build(geometry);
+  ASSERT_FALSE(bvh.nodes().empty());
+  TreeChecker checker{bvh, geometry, {}};
+  checker.visit(0, 0);
+  EXPECT_EQ(checker.reached, bvh.nodes().size()) << "every node is reachable exactly once";
+
+  // Every primitive in exactly one leaf.
+  EXPECT_EQ(checker.seen.size(), geometry.primitive_count());
+  for (const auto& [key, leaves] : checker.seen) EXPECT_EQ(leaves, 1) << key.first << "/" << key.second;
+  for (const TriangleMesh& m : geometry.meshes)
+    for (std::uint32_t i = 0; i < m.indices.size(); ++i) EXPECT_TRUE(checker.seen.count({m.geom_id, i}));
+  for (const Sphere& s : geometry.spheres) EXPECT_TRUE(checker.seen.count({s.geom_id, 0u}));
+
+  // The leaf-ordered copy is bit-identical to the scene's geometry.
+  const PrimitiveStore& store = bvh.primitives();
+  for (std::size_t i = 0; i < store.triangles.size(); ++i) {
+    const PrimitiveKey key = store.triangle_keys[i];
+    for (const TriangleMesh& m : geometry.meshes) {
+      if (m.geom_id != key.geom_id) continue;
+      const glm::uvec3 tri = m.indices[key.prim_id];
+      EXPECT_EQ(store.triangles[i].p0, m.positions[tri.x]);
+      EXPECT_EQ(store.triangles[i].p1, m.positions[tri.y]);
+      EXPECT_EQ(store.triangles[i].p2, m.positions[tri.z]);
+    }
+  }
+
+  const BuildStats stats = bvh.build_stats();
+  EXPECT_EQ(stats.nodes, bvh.nodes().size());
+  EXPECT_EQ(stats.leaves, checker.leaves);
+  EXPECT_EQ(stats.max_depth, checker.max_depth);
+  EXPECT_EQ(stats.nodes, 2 * stats.leaves - 1);  // a binary tree
+  EXPECT_EQ(stats.triangles, geometry.triangle_count());
+  EXPECT_EQ(stats.spheres, geometry.sphere_count());
+  EXPECT_EQ(stats.built_triangles, geometry.has_triangles());
+  EXPECT_EQ(stats.built_spheres, geometry.has_spheres());
+  EXPECT_GE(stats.memory_bytes, stats.nodes * sizeof(BvhNode));
+  EXPECT_GT(stats.sah_cost, 0.0);
+}
+
+TEST(BvhInvariants, NodeIs32Bytes) { EXPECT_EQ(sizeof(BvhNode), 32u); }
+
+TEST(BvhInvariants, TreesAreWellFormed) {
+  for (const NamedScene& scene : test_scenes()) {
+    check_tree(scene.geometry, {}, scene.name);
+    BvhBuildOptions small_leaves;
+    small_leaves.max_leaf_size = 1;
+    small_leaves.bins = 32;
+    check_tree(scene.geometry, small_leaves, scene.name + " (leaf size 1, 32 bins)");
+    BvhBuildOptions median;
+    median.split_method = BvhSplitMethod::ObjectMedian;
+    median.max_leaf_size = 3;
+    check_tree(scene.geometry, median, scene.name + " (object median)");
+  }
+}
+
+TEST(BvhInvariants, SerialAndParallelBuildsAreIdentical) {
+  const SceneGeometry soup = random_triangle_soup(20000, 5);
+  BvhBuildOptions serial;
+  serial.parallel = false;
+  BvhBackend a(serial), b{BvhBuildOptions{}};
+  a.build(soup);
+  b.build(soup);
+  ASSERT_EQ(a.nodes().size(), b.nodes().size());
+  EXPECT_EQ(0, std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size_bytes()));
+}
+
+TEST(BvhInvariants, SahBuildBeatsObjectMedian) {
+  for (const NamedScene& scene : test_scenes()) {
+    BvhBuildOptions median;
+    median.split_method = BvhSplitMethod::ObjectMedian;
+    BvhBackend sah_bvh, median_bvh(median);
+    sah_bvh.build(scene.geometry);
+    median_bvh.build(scene.geometry);
+    EXPECT_LT(sah_bvh.build_stats().sah_cost, median_bvh.build_stats().sah_cost) << scene.name;
+  }
+}
+
+TEST(BvhInvariants, CoincidentCentroidsStillRespectLeafSize) {
+  // 200 copies of one triangle (and 50 of one sphere): no plane separates them, the builder must fall back
+  // to splitting the list in half.
+  SceneGeometry g;
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  for (int i = 0; i < 200; ++i) mesh.indices.emplace_back(0, 1, 2);
+  g.meshes.push_back(mesh);
+  for (std::uint32_t k = 1; k <= 50; ++k) g.spheres.push_back({k, glm::vec3(0.25f, 0.25f, 0.0f), 0.5f});
+  check_tree(g, {}, "coincident");
+}
+
+TEST(BvhInvariants, LeavesNeverMixKinds) {
+  // Implied by check_tree (a sphere leaf's keys index sphere_keys), made explicit: sphere leaves hold
+  // exactly the spheres.
+  const SceneGeometry g = mixed_spheres_and_triangles(200, 800, 21);
+  BvhBackend bvh;
+  bvh.build(g);
+  std::size_t in_sphere_leaves = 0, in_triangle_leaves = 0;
+  for (const BvhNode& n : bvh.nodes()) {
+    if (!n.is_leaf()) continue;
+    (n.is_sphere_leaf() ? in_sphere_leaves : in_triangle_leaves) += n.prim_count();
+  }
+  EXPECT_EQ(in_sphere_leaves, g.sphere_count());
+  EXPECT_EQ(in_triangle_leaves, g.triangle_count());
+}
+
+TEST(BvhInvariants, OptionsAreValidated) {
+  for (int bins : {12, 16, 32}) {
+    BvhBuildOptions o;
+    o.bins = bins;
+    EXPECT_NO_THROW(BvhBackend{o});
+  }
+  for (int bins : {0, 11, 33}) {
+    BvhBuildOptions o;
+    o.bins = bins;
+    EXPECT_THROW(BvhBackend{o}, std::invalid_argument);
+  }
+  BvhBuildOptions o;
+  o.max_leaf_size = 0;
+  EXPECT_THROW(BvhBackend{o}, std::invalid_argument);
+  o = {};
+  o.traversal_cost = 0.0f;
+  EXPECT_THROW(make_bvh_backend(o), std::invalid_argument);
+  EXPECT_EQ(make_bvh_backend()->name(), "bvh");
+}
+
+TEST(BvhInvariants, EmptySceneBuildsAndMisses) {
+  BvhBackend bvh;
+  const SceneGeometry empty;
+  bvh.build(empty);
+  EXPECT_TRUE(bvh.nodes().empty());
+  Hit hit;
+  EXPECT_FALSE(bvh.intersect(Ray{}, hit));
+  EXPECT_FALSE(bvh.occluded(Ray{}));
+}
+
+}  // namespace
+}  // namespace twinray

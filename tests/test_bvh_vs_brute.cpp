@@ -1,0 +1,228 @@
+// The bvh backend against the brute-force oracle: on every ray, the same hit (geometry id, primitive id) and
+// bit-identical t, u, v and normal, for closest hits and any hits, over scenes chosen to provoke ties,
+// exact edge and vertex crossings, signed-zero directions and mixed primitive kinds.
+
+#include "backends/brute/brute_backend.h"
+#include "backends/bvh/bvh_backend.h"
+#include "core/sampling/rng.h"
+#include "core/scene/procedural.h"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace twinray {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr int kRaysPerScene = 20000;
+
+glm::vec3 random_direction(Rng& rng) {
+  glm::vec3 d(2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f);
+  // One ray in four has one or two exactly zero components, with either sign.
+  if (rng.next_below(4) == 0) {
+    const std::uint32_t k = rng.next_below(3);
+    d[static_cast<int>(k)] = rng.next_below(2) ? 0.0f : -0.0f;
+    if (rng.next_below(2)) d[static_cast<int>((k + 1) % 3)] = rng.next_below(2) ? 0.0f : -0.0f;
+  }
+  if (d == glm::vec3(0.0f)) d.x = 1.0f;
+  return d;
+}
+
+// Random rays through a box of half extent `spread` around `center`, with a mix of interval bounds.
+std::vector<Ray> random_rays(Rng& rng, const glm::vec3& center, float spread, int n) {
+  std::vector<Ray> rays(static_cast<std::size_t>(n));
+  for (Ray& r : rays) {
+    r.org = center + spread * glm::vec3(2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f,
+                                        2.0f * rng.next_float() - 1.0f);
+    // Half the rays aim at a random point of the scene, so that most of them hit something.
+    const glm::vec3 aim = center + spread * glm::vec3(2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f,
+                                                      2.0f * rng.next_float() - 1.0f);
+    r.dir = rng.next_below(2) == 0 ? random_direction(rng) : aim - r.org;
+    if (r.dir == glm::vec3(0.0f)) r.dir.z = 1.0f;
+    r.tmin = rng.next_below(4) == 0 ? 0.5f * rng.next_float() : 0.0f;
+    r.tmax = rng.next_below(4) == 0 ? r.tmin + 2.0f * rng.next_float() : kInf;
+  }
+  return rays;
+}
+
+// Rays through exact vertices, edge midpoints and diagonal points of grid_mesh(16, 16), from both sides,
+// along small-integer directions (so the ray passes exactly through the target).
+std::vector<Ray> grid_edge_rays(Rng& rng, int n) {
+  std::vector<Ray> rays(static_cast<std::size_t>(n));
+  for (Ray& r : rays) {
+    const glm::vec3 target(static_cast<float>(rng.next_below(33)) * 0.5f, static_cast<float>(rng.next_below(33)) * 0.5f,
+                           0.0f);
+    glm::vec3 dir(static_cast<float>(static_cast<int>(rng.next_below(7)) - 3),
+                  static_cast<float>(static_cast<int>(rng.next_below(7)) - 3),
+                  static_cast<float>(static_cast<int>(rng.next_below(9)) - 4));
+    if (dir.z == 0.0f) dir.z = rng.next_below(2) ? -1.0f : 1.0f;
+    if (rng.next_below(3) == 0) dir.x = rng.next_below(2) ? 0.0f : -0.0f;
+    r.org = target - 0.75f * dir;
+    r.dir = dir;
+  }
+  return rays;
+}
+
+std::string describe(const Ray& r) {
+  return "org (" + std::to_string(r.org.x) + ", " + std::to_string(r.org.y) + ", " + std::to_string(r.org.z) +
+         ") dir (" + std::to_string(r.dir.x) + ", " + std::to_string(r.dir.y) + ", " + std::to_string(r.dir.z) +
+         ") [" + std::to_string(r.tmin) + ", " + std::to_string(r.tmax) + "]";
+}
+
+bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+
+// Compares every ray; returns the number of closest hits (so a scene that is never hit cannot pass).
+std::size_t expect_identical(const SceneGeometry& geometry, const std::vector<Ray>& rays) {
+  const std::unique_ptr<Backend> brute = make_brute_backend();
+  const std::unique_ptr<Backend> bvh = make_bvh_backend();
+  brute->build(geometry);
+  bvh->build(geometry);
+  QueryStats brute_stats, bvh_stats;
+  std::size_t hits = 0, mismatches = 0;
+  for (const Ray& ray : rays) {
+    Hit a, b;
+    const bool found_a = brute->intersect(ray, a, &brute_stats);
+    const bool found_b = bvh->intersect(ray, b, &bvh_stats);
+    const bool same = found_a == found_b && a.geom_id == b.geom_id && a.prim_id == b.prim_id &&
+                      same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) &&
+                      same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
+    const bool occluded_a = brute->occluded(ray, &brute_stats);
+    const bool occluded_b = bvh->occluded(ray, &bvh_stats);
+    if (!same || occluded_a != found_a || occluded_b != found_a) {
+      if (++mismatches <= 5)
+        ADD_FAILURE() << describe(ray) << "\n brute: " << found_a << " " << a.geom_id << "/" << a.prim_id << " t=" << a.t
+                      << " u=" << a.u << " v=" << a.v << " occluded=" << occluded_a << "\n bvh:   " << found_b << " "
+                      << b.geom_id << "/" << b.prim_id << " t=" << b.t << " u=" << b.u << " v=" << b.v
+                      << " occluded=" << occluded_b;
+    }
+    if (found_a) {
+      ++hits;
+      EXPECT_TRUE(std::isfinite(a.u) && std::isfinite(a.v) && std::isfinite(a.ng.x));
+    }
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_EQ(bvh_stats.queries, 2 * rays.size());
+  // The point of a BVH: far fewer primitive tests than the oracle.
+  EXPECT_LT(bvh_stats.primitives_tested * 4, brute_stats.primitives_tested);
+  return hits;
+}
+
+TEST(BvhVsBrute, TriangleSoup) {
+  Rng rng(1, 0);
+  const std::size_t hits = expect_identical(random_triangle_soup(1000, 7), random_rays(rng, glm::vec3(0.0f), 1.5f, kRaysPerScene));
+  EXPECT_GT(hits, kRaysPerScene / 4u);
+}
+
+TEST(BvhVsBrute, TessellatedSphereFromInsideAndOutside) {
+  Rng rng(2, 0);
+  const std::size_t hits =
+      expect_identical(tessellated_sphere(glm::vec3(0.5f, -0.25f, 0.0f), 1.0f, 3), random_rays(rng, {0.5f, -0.25f, 0.0f}, 1.5f, kRaysPerScene));
+  EXPECT_GT(hits, kRaysPerScene / 4u);
+}
+
+TEST(BvhVsBrute, GridWithRaysThroughEdgesAndVertices) {
+  Rng rng(3, 0);
+  const std::size_t hits = expect_identical(grid_mesh(16, 16), grid_edge_rays(rng, kRaysPerScene));
+  EXPECT_GT(hits, kRaysPerScene / 4u);
+}
+
+TEST(BvhVsBrute, SpheresMixedWithTriangles) {
+  Rng rng(4, 0);
+  const std::size_t hits = expect_identical(mixed_spheres_and_triangles(100, 400, 9), random_rays(rng, glm::vec3(0.0f), 1.5f, kRaysPerScene));
+  EXPECT_GT(hits, kRaysPerScene / 4u);
+}
+
+TEST(BvhVsBrute, SpheresOnly) {
+  Rng rng(5, 0);
+  const std::size_t hits = expect_identical(random_spheres(200, 10), random_rays(rng, glm::vec3(0.0f), 1.5f, kRaysPerScene));
+  EXPECT_GT(hits, kRaysPerScene / 10u);
+}
+
+TEST(BvhVsBrute, DuplicatedGeometryResolvesTiesByLowestIds) {
+  // Two identical meshes (geom 0 and 2) and identical duplicate spheres (geom 1 and 3): every hit is a tie
+  // that only the (geom_id, prim_id) order can decide.
+  SceneGeometry g = random_triangle_soup(300, 8);
+  g.meshes.push_back(g.meshes[0]);
+  g.meshes[1].geom_id = 2;
+  g.spheres.push_back({1, glm::vec3(0.2f, 0.1f, 0.0f), 0.3f});
+  g.spheres.push_back({3, glm::vec3(0.2f, 0.1f, 0.0f), 0.3f});
+  Rng rng(6, 0);
+  const std::vector<Ray> rays = random_rays(rng, glm::vec3(0.0f), 1.5f, kRaysPerScene / 2);
+  EXPECT_GT(expect_identical(g, rays), rays.size() / 8);
+  const std::unique_ptr<Backend> bvh = make_bvh_backend();
+  bvh->build(g);
+  for (const Ray& ray : rays) {
+    Hit hit;
+    if (bvh->intersect(ray, hit)) {
+      EXPECT_TRUE(hit.geom_id == 0 || hit.geom_id == 1) << hit.geom_id;
+    }
+  }
+}
+
+TEST(BvhVsBrute, OriginOnSlabPlaneWithZeroDirectionComponent) {
+  // Two triangles sharing the edge x = 1 of the z = 0 plane, each in its own leaf, plus a far triangle so
+  // the root is larger. A ray with dir.x = +-0 and org.x = 1 lies exactly in the leaves' slab planes x = 1
+  // (hi of one box, lo of the other): the slab distance is 0 * inf = NaN, which must count as inside.
+  SceneGeometry g;
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {2, 0, 0}, {5, 5, 5}, {6, 5, 5}, {5, 6, 5}};
+  mesh.indices = {{0, 1, 2}, {1, 3, 2}, {4, 5, 6}};
+  mesh.positions.reserve(mesh.positions.size() + 1);
+  g.meshes.push_back(mesh);
+  BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  BvhBackend bvh(one_per_leaf);
+  bvh.build(g);
+  ASSERT_EQ(bvh.build_stats().leaves, 3u);
+  const std::unique_ptr<Backend> brute = make_brute_backend();
+  brute->build(g);
+  for (float zero : {0.0f, -0.0f}) {
+    for (float dz : {-1.0f, 1.0f}) {
+      Ray ray;
+      ray.org = {1.0f, 0.5f, -dz};
+      ray.dir = {zero, zero, dz};
+      Hit a, b;
+      ASSERT_TRUE(brute->intersect(ray, a));
+      ASSERT_TRUE(bvh.intersect(ray, b)) << "dir.x " << zero << " dz " << dz;
+      EXPECT_EQ(a.prim_id, b.prim_id);
+      EXPECT_EQ(b.t, 1.0f);
+      EXPECT_TRUE(bvh.occluded(ray));
+    }
+  }
+}
+
+TEST(BvhVsBrute, InvalidRaysMissWithoutTraversal) {
+  const SceneGeometry g = mixed_spheres_and_triangles(50, 200, 3);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<Ray> invalid(7);
+  invalid[0].org = {nan, 0.0f, 0.0f};
+  invalid[1].dir = {0.0f, 0.0f, 0.0f};
+  invalid[2].dir = {kInf, 0.0f, 0.0f};
+  invalid[3].tmin = -1.0f;
+  invalid[4].tmin = 2.0f, invalid[4].tmax = 1.0f;
+  invalid[5].tmax = nan;
+  invalid[6].tmin = kInf;
+  for (const std::unique_ptr<Backend>& backend : {make_brute_backend(), make_bvh_backend()}) {
+    backend->build(g);
+    QueryStats stats;
+    for (const Ray& ray : invalid) {
+      Hit hit;
+      hit.geom_id = 5;  // must be reset
+      EXPECT_FALSE(backend->intersect(ray, hit, &stats)) << backend->name() << " " << describe(ray);
+      EXPECT_FALSE(hit.found());
+      EXPECT_FALSE(backend->occluded(ray, &stats)) << backend->name() << " " << describe(ray);
+    }
+    EXPECT_EQ(stats.nodes_visited, 0u) << backend->name();
+    EXPECT_EQ(stats.primitives_tested, 0u) << backend->name();
+  }
+}
+
+}  // namespace
+}  // namespace twinray
