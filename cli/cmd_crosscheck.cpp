@@ -24,7 +24,8 @@ namespace {
 struct CrosscheckOptions {
   std::string scene;
   std::string backends = "bvh,embree";
-  std::size_t rays = 100000;
+  // Signed on purpose: CLI11 would wrap "-5" into a huge unsigned count.
+  std::int64_t rays = 100000;
   std::string kinds = "camera,uniform,diffuse,shadow";
   std::uint64_t seed = 1;
   std::string json;
@@ -82,8 +83,10 @@ int run_crosscheck(const CrosscheckOptions& opt) {
     fmt::print(stderr, "twinray crosscheck: error: --backends needs at least two backends to compare\n");
     return kExitBadInput;
   }
-  if (opt.rays == 0) {
-    fmt::print(stderr, "twinray crosscheck: error: --rays must be at least 1\n");
+  // Each ray costs 32 bytes plus a 40-byte hit and an any-hit flag per backend: 10M rays stay near 1 GB.
+  constexpr std::int64_t kMaxRays = 10'000'000;
+  if (opt.rays < 1 || opt.rays > kMaxRays) {
+    fmt::print(stderr, "twinray crosscheck: error: --rays must be between 1 and {}, got {}\n", kMaxRays, opt.rays);
     return kExitBadInput;
   }
 
@@ -113,7 +116,7 @@ int run_crosscheck(const CrosscheckOptions& opt) {
   std::string report;
 
   for (const crosscheck::RayKind kind : kinds) {
-    const std::vector<Ray> rays = crosscheck::generate_rays(kind, scene, *backends.front(), opt.rays, opt.seed);
+    const std::vector<Ray> rays = crosscheck::generate_rays(kind, scene, *backends.front(), static_cast<std::size_t>(opt.rays), opt.seed);
     std::vector<BackendRun> runs;
     for (std::size_t k = 0; k < backends.size(); ++k) {
       runs.push_back(trace(*backends[k], rays));

@@ -12,10 +12,10 @@ PACKAGES=(
   libglm-dev
   libgtest-dev libgmock-dev
   libbenchmark-dev
+  gnuplot-nox            # plots of the benchmark and convergence reports (SVG, no X)
   nlohmann-json3-dev     # scene format
   libcli11-dev           # command line
   libfmt-dev
-  libtinyobjloader-dev   # OBJ loading
 )
 
 missing=()

@@ -104,10 +104,12 @@ PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, st
       c.max_rel_t_diff = std::max(c.max_rel_t_diff, rel);
       same = t_agrees(index, ray, ha.t, hb.t);
       if (!same && ambiguous) kind = MismatchClass::Edge;
+    } else if (ambiguous) {
+      // Checked before ties: neighbours across a shared edge also meet at equal t, and the edge is the
+      // better explanation.
+      kind = MismatchClass::Edge;
     } else if (ha.found() && hb.found() && t_agrees(index, ray, ha.t, hb.t)) {
       kind = MismatchClass::Tie;
-    } else if (ambiguous) {
-      kind = MismatchClass::Edge;
     }
 
     if (same) {

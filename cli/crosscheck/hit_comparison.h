@@ -6,7 +6,7 @@
 //   edge     the hit lies on a boundary where two correct intersectors may legitimately differ: within the
 //            world-space tolerance of a triangle edge or vertex, on a sphere's silhouette (grazing), or at the
 //            end of the ray's interval [tmin, tmax];
-//   tie      both hit, different primitives, at parameters equal within the t tolerance (coplanar or
+//   tie      not an edge case; both hit, different primitives, at parameters equal within the t tolerance (coplanar or
 //            duplicated geometry; only backends with honours_ties resolve these identically);
 //   genuine  anything else: a real bug in one of the backends.
 //

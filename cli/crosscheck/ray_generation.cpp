@@ -56,10 +56,12 @@ class FirstHitSampler {
   FirstHitSampler(const Scene& scene, const Backend& backend, std::size_t count, Rng& rng)
       : camera_(scene.camera), backend_(backend), count_(std::max<std::size_t>(count, 1)), rng_(rng) {}
 
-  // A visible surface point, or nothing after many misses (an empty view).
+  // A visible surface point seen through a random pixel, or nothing after many consecutive misses (a
+  // view with (almost) nothing in it).
   bool next(SurfacePoint& out) {
-    for (int attempt = 0; attempt < 64; ++attempt) {
-      const Ray ray = camera_ray(camera_, cursor_++ % count_, count_, rng_);
+    for (int attempt = 0; attempt < 4096; ++attempt) {
+      const std::size_t stratum = static_cast<std::size_t>(rng_.next_double() * static_cast<double>(count_));
+      const Ray ray = camera_ray(camera_, std::min(stratum, count_ - 1), count_, rng_);
       Hit hit;
       if (!backend_.intersect(ray, hit)) continue;
       const glm::vec3 p = ray.at(hit.t);
@@ -74,7 +76,6 @@ class FirstHitSampler {
   PinholeCamera camera_;
   const Backend& backend_;
   std::size_t count_;
-  std::size_t cursor_ = 0;
   Rng& rng_;
 };
 

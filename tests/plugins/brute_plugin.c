@@ -73,6 +73,11 @@ static int hit_triangle(const twinray_ray* ray, const twinray_mesh* mesh, size_t
   double p0[3], p1[3], p2[3], o[3], d[3], e1[3], e2[3], pv[3], tv[3], qv[3];
   double det, inv, u, v;
   float t;
+#ifdef TWINRAY_PLUGIN_INJECT_BUG
+  /* A deliberately broken build (twinray_buggy_plugin): every mesh loses its last triangle, the way a BVH
+     with an off-by-one leaf range would. The tests use it to prove that crosscheck catches such bugs. */
+  if (prim + 1 == mesh->triangle_count) return 0;
+#endif
   load(mesh->positions + 3 * (size_t)mesh->indices[3 * prim + 0], p0);
   load(mesh->positions + 3 * (size_t)mesh->indices[3 * prim + 1], p1);
   load(mesh->positions + 3 * (size_t)mesh->indices[3 * prim + 2], p2);

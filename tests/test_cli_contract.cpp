@@ -1,0 +1,172 @@
+// The command-line contract: exit codes, JSON keys and clean failure on bad input (docs/cli.md).
+
+#include "tests/cli_runner.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace twinray::testing {
+namespace {
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+TEST(CliContract, HelpListsSubcommands) {
+  const CommandResult r = run_twinray("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* sub : {"info", "crosscheck", "render"}) EXPECT_NE(r.output.find(sub), std::string::npos) << sub;
+}
+
+TEST(CliContract, InfoReportsFeaturesLeftOut) {
+  const auto dir = scratch_dir("info");
+  const CommandResult r =
+      run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) + " --json " + quoted(dir / "info.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = read_json(dir / "info.json");
+  EXPECT_GT(j.at("triangles").get<int>(), 0);
+  EXPECT_EQ(j.at("spheres").get<int>(), 0);
+  bool saw_sphere_feature = false;
+  for (const auto& f : j.at("features")) {
+    if (f.at("name") == "sphere geometry") {
+      saw_sphere_feature = true;
+      EXPECT_FALSE(f.at("built").get<bool>());
+    }
+  }
+  EXPECT_TRUE(saw_sphere_feature);
+  EXPECT_NE(r.output.find("left out"), std::string::npos);
+}
+
+TEST(CliContract, InfoBuildsBackendsOnlyForGeometryPresent) {
+  const auto dir = scratch_dir("info-build");
+  const CommandResult r = run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) +
+                                      " --build bvh,embree --json " + quoted(dir / "info.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = read_json(dir / "info.json");
+  for (const char* b : {"bvh", "embree"}) {
+    EXPECT_TRUE(j.at("backends").at(b).at("built_triangles").get<bool>()) << b;
+    EXPECT_FALSE(j.at("backends").at(b).at("built_spheres").get<bool>()) << b;
+  }
+  EXPECT_GT(j.at("backends").at("bvh").at("nodes").get<int>(), 0);
+}
+
+TEST(CliContract, CrosscheckPassesOnBundledScenesWithJsonKeys) {
+  const auto dir = scratch_dir("crosscheck");
+  for (const char* scene : {"scenes/cornell-box.json", "scenes/spheres.json"}) {
+    const auto json = dir / "cc.json";
+    const CommandResult r = run_twinray("crosscheck " + quoted(source_path(scene)) +
+                                        " --backends bvh,embree,brute --rays 3000 --json " + quoted(json));
+    ASSERT_EQ(r.exit_code, 0) << scene << "\n" << r.output;
+    const nlohmann::json j = read_json(json);
+    EXPECT_EQ(j.at("genuine_mismatches").get<int>(), 0);
+    const double identical = j.at("identical_fraction").get<double>();
+    EXPECT_GE(identical, 0.999) << scene;
+    EXPECT_LE(identical, 1.0);
+    EXPECT_EQ(j.at("verdict"), "pass");
+    for (const char* kind : {"camera", "uniform", "diffuse", "shadow"}) {
+      const auto& k = j.at("kinds").at(kind);
+      EXPECT_GT(k.at("rays").get<int>(), 0) << kind;
+      EXPECT_EQ(k.at("comparisons").size(), 2u);
+    }
+    // bvh and brute share the intersection routines and the tie rule: they must agree exactly.
+    for (const auto& [kind, k] : j.at("kinds").items()) {
+      for (const auto& c : k.at("comparisons")) {
+        if (c.at("backend") == "brute") {
+          EXPECT_EQ(c.at("identical"), c.at("rays")) << scene << " " << kind;
+        }
+      }
+    }
+  }
+}
+
+TEST(CliContract, CrosscheckAcceptsBareMesh) {
+  const auto dir = scratch_dir("bare-mesh");
+  {
+    std::ofstream obj(dir / "tet.obj");
+    obj << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n";
+  }
+  const CommandResult r = run_twinray("crosscheck " + quoted(dir / "tet.obj") + " --backends bvh,brute --rays 2000");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("PASS"), std::string::npos);
+}
+
+struct BadInvocation {
+  const char* name;
+  std::string args;
+  const char* expected_in_message;
+};
+
+TEST(CliContract, BadInputExitsTwoWithMessageAndNoOutput) {
+  const auto dir = scratch_dir("bad-input");
+  {
+    std::ofstream bad(dir / "broken.json");
+    bad << "{\n  \"camera\": {\n    \"position\": [0, 0, 1],,\n  }\n}\n";
+  }
+  const std::string cornell = quoted(source_path("scenes/cornell-box.json"));
+  const std::string json_out = quoted(dir / "out.json");
+  const std::vector<BadInvocation> cases = {
+      {"missing scene", "crosscheck " + quoted(dir / "nope.json") + " --json " + json_out, "nope.json"},
+      {"malformed json", "crosscheck " + quoted(dir / "broken.json") + " --json " + json_out, "broken.json:3"},
+      {"directory as scene", "info " + quoted(dir) + " --json " + json_out, "twinray-test-bad-input"},
+      {"unknown backend", "crosscheck " + cornell + " --backends bvh,optix --json " + json_out, "optix"},
+      {"one backend", "crosscheck " + cornell + " --backends bvh --json " + json_out, "at least two"},
+      {"unknown kind", "crosscheck " + cornell + " --kinds camera,laser --json " + json_out, "laser"},
+      {"zero rays", "crosscheck " + cornell + " --rays 0 --json " + json_out, "--rays"},
+      {"negative rays", "crosscheck " + cornell + " --rays -5 --json " + json_out, "rays"},
+      {"unknown flag", "crosscheck " + cornell + " --frobnicate", "frobnicate"},
+      {"missing plugin", "crosscheck " + cornell + " --backends bvh,plugin:/nonexistent/libx.so --json " + json_out,
+       "libx.so"},
+  };
+  for (const BadInvocation& c : cases) {
+    const CommandResult r = run_twinray(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.name << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expected_in_message), std::string::npos) << c.name << "\n" << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.json")) << c.name;
+  }
+  // Nothing but the inputs is left in the folder (no temporary files either).
+  std::size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1u);
+}
+
+TEST(CliContract, UnwritableJsonTargetFailsCleanly) {
+  const auto dir = scratch_dir("unwritable");
+  const CommandResult r = run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) + " --json " +
+                                      quoted(dir / "no-such-folder" / "x.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("x.json"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace twinray::testing
+
+namespace twinray::testing {
+namespace {
+
+// A BVH that loses one triangle per mesh must be caught: genuine mismatches, exit code 1, verdict "fail".
+TEST(CliContract, CrosscheckExitsOneOnGenuineMismatch) {
+  const auto dir = scratch_dir("buggy-plugin");
+  const CommandResult r = run_twinray("crosscheck " + quoted(source_path("scenes/cornell-box.json")) +
+                                      " --backends brute,plugin:" + TWINRAY_TEST_BUGGY_PLUGIN +
+                                      " --rays 5000 --json " + quoted(dir / "cc.json"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("genuine"), std::string::npos);
+  std::ifstream in(dir / "cc.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_GT(j.at("genuine_mismatches").get<int>(), 0);
+  EXPECT_EQ(j.at("verdict"), "fail");
+  EXPECT_LT(j.at("identical_fraction").get<double>(), 1.0);
+}
+
+// The correct build of the same plugin passes against the built-in oracle.
+TEST(CliContract, CrosscheckAcceptsCorrectPlugin) {
+  const CommandResult r = run_twinray("crosscheck " + quoted(source_path("scenes/spheres.json")) +
+                                      " --backends brute,plugin:" + TWINRAY_TEST_BRUTE_PLUGIN + " --rays 3000");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
+}  // namespace
+}  // namespace twinray::testing
