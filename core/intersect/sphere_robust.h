@@ -92,19 +92,14 @@ inline bool intersect_sphere(const glm::vec3& org, const glm::vec3& dir, const g
   return false;
 }
 
-// Unit outward normal and (u,v) = (phi/2pi, theta/pi) (theta from +Y) at parameter t, computed consistently.
-//
-// A float t cannot locate the hit point on a tiny far sphere (one ulp of t = 1e4 is ~1e-3, the size of the
-// sphere), so the point is not taken from org + t dir directly: the double-precision root that t was
-// rounded from is recomputed and the point evaluated from it, which puts it on the sphere to double accuracy. The normal is
-// then normalize(p - center), never divided by the float radius, so it is unit length to rounding.
-// phi = atan2(n.z, n.x) mapped to [0, 2pi), so u is in [0, 1); theta = acos(n.y) in [0, pi].
-inline void sphere_hit_attributes(const glm::vec3& org, const glm::vec3& dir, float t, const glm::vec3& center,
-                                  float radius, glm::vec3& ng, float& u, float& v) {
-  using sphere_detail::DVec3;
+namespace sphere_detail {
+
+// The unit vector from the center to the hit at float parameter t, in double: the double root that t was
+// rounded from is recomputed and the point evaluated from it (see sphere_hit_attributes).
+inline DVec3 hit_direction(const glm::vec3& org, const glm::vec3& dir, float t, const glm::vec3& center, float radius) {
   double t0 = 0.0, t1 = 0.0;
   double td = t;
-  if (sphere_detail::sphere_roots(org, dir, center, radius, t0, t1)) {
+  if (sphere_roots(org, dir, center, radius, t0, t1)) {
     // Mirror intersect_sphere's choice: it reports the near root whenever that root (rounded) qualifies, so
     // a t equal to the rounded near root is the near root. Near tangency both roots may round to within an
     // ulp of each other, which is why "the root nearest to t" would not do. For any other t (a caller's
@@ -116,9 +111,36 @@ inline void sphere_hit_attributes(const glm::vec3& org, const glm::vec3& dir, fl
   const DVec3 p{static_cast<double>(org.x) + td * dir.x - center.x,
                 static_cast<double>(org.y) + td * dir.y - center.y,
                 static_cast<double>(org.z) + td * dir.z - center.z};
-  const double len = std::sqrt(sphere_detail::dot(p, p));
-  DVec3 n{0.0, 1.0, 0.0};  // only reachable for a zero radius; any unit vector is as good as another
-  if (len > 0.0) n = {p.x / len, p.y / len, p.z / len};
+  const double len = std::sqrt(dot(p, p));
+  if (!(len > 0.0)) return {0.0, 1.0, 0.0};  // only reachable for a zero radius; any unit vector will do
+  return {p.x / len, p.y / len, p.z / len};
+}
+
+}  // namespace sphere_detail
+
+// The hit point at parameter t, on the sphere to double accuracy and rounded to float once, so its error is
+// half an ulp of each of its own coordinates: the premise of the Wächter-Binder spawn offset
+// (core/geometry/ray_offset.h). Neither org + t dir nor center + radius * ng in float would do: both carry
+// the rounding error of the larger operands (for a ground sphere of radius 1000 centred at y = -1000, about
+// 6e-5 in y, far more than the offset), and secondary rays would start inside the sphere: shadow acne.
+inline glm::vec3 sphere_hit_point(const glm::vec3& org, const glm::vec3& dir, float t, const glm::vec3& center,
+                                  float radius) {
+  const sphere_detail::DVec3 n = sphere_detail::hit_direction(org, dir, t, center, radius);
+  const double r = radius;
+  return glm::vec3(static_cast<float>(center.x + r * n.x), static_cast<float>(center.y + r * n.y),
+                   static_cast<float>(center.z + r * n.z));
+}
+
+// Unit outward normal and (u,v) = (phi/2pi, theta/pi) (theta from +Y) at parameter t, computed consistently.
+//
+// A float t cannot locate the hit point on a tiny far sphere (one ulp of t = 1e4 is ~1e-3, the size of the
+// sphere), so the point is not taken from org + t dir directly: the double-precision root that t was
+// rounded from is recomputed and the point evaluated from it, which puts it on the sphere to double accuracy. The normal is
+// then normalize(p - center), never divided by the float radius, so it is unit length to rounding.
+// phi = atan2(n.z, n.x) mapped to [0, 2pi), so u is in [0, 1); theta = acos(n.y) in [0, pi].
+inline void sphere_hit_attributes(const glm::vec3& org, const glm::vec3& dir, float t, const glm::vec3& center,
+                                  float radius, glm::vec3& ng, float& u, float& v) {
+  const sphere_detail::DVec3 n = sphere_detail::hit_direction(org, dir, t, center, radius);
   ng = glm::vec3(static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z));
 
   constexpr double kTwoPi = 2.0 * std::numbers::pi;

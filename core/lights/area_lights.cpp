@@ -60,11 +60,10 @@ LightSampler::LightSampler(const Scene& scene, const EnvironmentLight* env) {
   if (env != nullptr && luminance(env->average_radiance()) > 0.0f) {
     env_ = env;
     env_index_ = static_cast<std::uint32_t>(power.size());
-    // Power through a disc the size of the scene's bounding sphere: pi R^2 * 4 pi * L_avg. This is the
-    // flux the environment delivers to the scene, comparable to the flux of the surface lights.
-    const Bounds3 b = scene.geometry.bounds();
-    const float radius = b.empty() ? 1.0f : std::max(0.5f * b.diagonal(), 1e-6f);
-    power.push_back(kPi * radius * radius * 4.0f * kPi * luminance(env->average_radiance()));
+    // Half of the choices when there are surface lights (see area_lights.h), all of them otherwise.
+    float surface_power = 0.0f;
+    for (float p : power) surface_power += p;
+    power.push_back(surface_power > 0.0f ? surface_power : 1.0f);
   }
   if (!power.empty()) {
     float total = 0.0f;

@@ -11,10 +11,12 @@
 //    cos_max)) -- every such direction hits the sphere, and no sample is wasted on its far side;
 //  - sphere seen from inside (or from its surface): a point uniform in area, as for triangles;
 //  - environment: EnvironmentLight::sample (importance tables, or uniform directions).
-// The choice of light uses a Distribution1D over the lights' power (pi * area * luminance(radiance) for
-// surfaces, pi * R^2 * 4 pi * luminance(average radiance)-ish for the environment, see power estimates in
-// area_lights.cpp). pdf_* functions return exactly the density sample() produced, selection included,
-// which is what the MIS weights need.
+// The choice of light uses a Distribution1D: surface lights in proportion to their power (pi * area *
+// luminance(radiance)). The environment, when there are surface lights too, gets a fixed half of the
+// choices: its "power" has no robust estimate (pi R^2 4 pi L with R the scene's bounding radius lets one
+// large ground sphere starve a small lamp of samples), and a fixed half is never worse than twice the
+// variance of the best split in either extreme (environment or lamps dominating). pdf_* functions return
+// exactly the density sample() produced, selection included, which is what the MIS weights need.
 //
 // Spheres only enter this code when the scene has emissive spheres; the environment only when there is one.
 

@@ -1,5 +1,7 @@
 #include "core/render/light_transport.h"
 
+#include "core/intersect/sphere_robust.h"
+
 #include "core/geometry/ray_offset.h"
 #include "core/sampling/warp.h"
 
@@ -36,7 +38,9 @@ SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const H
   const SceneContext::ShapeRef ref = ctx.shape_of_geom[hit.geom_id];
   if (ref.sphere) {
     const Sphere& s = ctx.scene->geometry.spheres[ref.index];
-    sp.p = s.center + s.radius * hit.ng;
+    // In double and rounded once (sphere_robust.h): center + radius * ng in float is off by ulps of the
+    // center and the radius, enough to start secondary rays inside a large sphere.
+    sp.p = sphere_hit_point(ray.org, ray.dir, hit.t, s.center, s.radius);
   } else {
     const TriangleMesh& m = ctx.scene->geometry.meshes[ref.index];
     const glm::uvec3 tri = m.indices[hit.prim_id];
