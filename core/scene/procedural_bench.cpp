@@ -17,7 +17,9 @@ constexpr float kPi = std::numbers::pi_v<float>;
 
 // Random triangles thinner than this (twice the area over the longest edge squared) are redrawn: the
 // loaders would drop (near-)degenerate ones, and the benchmark should measure what a renderer would keep.
-constexpr float kMinThinness = 1e-3f;
+// 1e-4 still leaves the hairball's thinnest needles (about 1 : 2400 at 4M triangles) a width of hundreds of
+// float ulps at unit coordinates, far from degenerate.
+constexpr float kMinThinness = 1e-4f;
 
 float thinness(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
   const float area2 = glm::length(glm::cross(p1 - p0, p2 - p0));
@@ -112,10 +114,11 @@ SceneGeometry bench_sphere(std::size_t triangles) {
 }
 
 SceneGeometry bench_soup(std::size_t triangles, std::uint64_t seed) {
-  // Cube [-1,1]^3 cut into N cells of side 2/cbrt(N); vertices spread over about two cells around a random
-  // center, so the number of triangles a ray crosses stays about the same at every N.
+  // Vertices within `spread` of a random center in [-1,1]^3. The spread falls as N^(-1/2), so the total
+  // triangle area, and with it the number of triangles a ray crosses, stays about constant across the
+  // series (a fixed spread would make a 4M soup an opaque block costing thousands of tests per ray).
   const std::size_t n = std::max<std::size_t>(triangles, 1);
-  const float spread = 2.0f / std::cbrt(static_cast<float>(n));
+  const float spread = 0.25f * std::sqrt(1024.0f / static_cast<float>(n));
   Rng rng(seed, 0x50u);
   return random_triangles(n, rng, [spread](Rng& r, glm::vec3* p) {
     const glm::vec3 c = uniform_in_cube(r) * (1.0f - spread);
@@ -168,11 +171,16 @@ SceneGeometry bench_terrain(std::size_t triangles, std::uint64_t seed) {
 }
 
 SceneGeometry bench_hairball(std::size_t triangles, std::uint64_t seed) {
-  // Needles of length 0.6 and width 0.004 (150:1) with random centers in the unit ball and random
-  // directions: every box is long and nearly empty, and boxes overlap at every level of the tree.
-  constexpr float kLength = 0.6f, kWidth = 0.004f;
+  // Needles with random centers in the unit ball and random directions. At 1k triangles they are 0.6 long
+  // and 0.004 wide (150 : 1); with more triangles the length shrinks as N^(-1/3) (a needle stays about ten
+  // times the mean spacing of the centers, so boxes keep overlapping at every level of the tree) and the
+  // width as N^(-2/3), which keeps the total area, and so the number of needles a ray crosses, constant.
+  // Without that, a 1M-triangle ball is so dense that one shadow ray tests thousands of triangles.
+  const std::size_t n = std::max<std::size_t>(triangles, 1);
+  const float shrink = std::cbrt(1024.0f / static_cast<float>(n));
+  const float length = 0.6f * shrink, width = 0.004f * shrink * shrink;
   Rng rng(seed, 0x4a1bu);
-  return random_triangles(std::max<std::size_t>(triangles, 1), rng, [](Rng& r, glm::vec3* p) {
+  return random_triangles(n, rng, [length, width](Rng& r, glm::vec3* p) {
     glm::vec3 c;
     do c = uniform_in_cube(r);
     while (glm::dot(c, c) > 1.0f);
@@ -180,9 +188,9 @@ SceneGeometry bench_hairball(std::size_t triangles, std::uint64_t seed) {
     glm::vec3 side = glm::cross(d, uniform_direction(r));
     const float len = glm::length(side);
     side = len > 0.1f ? side / len : glm::normalize(glm::cross(d, std::abs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
-    p[0] = c - 0.5f * kLength * d;
-    p[1] = c + 0.5f * kLength * d;
-    p[2] = c + kWidth * side;
+    p[0] = c - 0.5f * length * d;
+    p[1] = c + 0.5f * length * d;
+    p[2] = c + width * side;
   });
 }
 

@@ -3,10 +3,11 @@
 // meshes, each generated at any size so that build and traversal cost can be plotted against the triangle
 // count N. Each family stresses a BVH differently:
 //   sphere   a closed tessellated sphere: a well-behaved surface, the easy case;
-//   soup     independent random triangles filling a cube, each about two "cells" wide at every N, so the
-//            depth complexity stays roughly constant as N grows: measures pure scaling;
+//   soup     independent random triangles in a cube, smaller as N grows so that the depth complexity
+//            stays about constant: measures pure scaling;
 //   terrain  a height field: one large, mostly flat surface seen at a grazing angle;
-//   hairball long thin randomly oriented triangles crossing a ball: boxes overlap heavily, the hard case.
+//   hairball long thin randomly oriented needles in a ball: boxes overlap heavily, the hard case (needle
+//            size shrinks with N so that the depth complexity, like the soup's, stays about constant).
 //
 // Deterministic: the same (family, N, seed) gives bit-identical geometry (core/sampling/rng.h, plain IEEE
 // float). Results satisfy the SceneGeometry invariants (no degenerate triangle, spare vertex capacity for
