@@ -73,8 +73,9 @@ TEST(BackendsAgree, BvhAndEmbreeRobustHaveNoGenuineMismatch) {
       EXPECT_GE(c.identical_fraction(), 0.999) << named.name << " " << crosscheck::to_string(kind);
       // Rays leaving a convex or flat surface (diffuse bounces, shadow segments toward geometry 0) may
       // legitimately all miss; rays from the camera and through the bounds must find something.
-      if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform)
+      if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {
         EXPECT_GT(c.hits_a, 0u) << named.name << " " << crosscheck::to_string(kind);
+      }
     }
   }
 }

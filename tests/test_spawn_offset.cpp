@@ -72,7 +72,7 @@ TEST(SpawnOffset, LargeTriangleFarFromOriginHasNoAcne) {
   g.meshes.push_back(m);
   auto backend = make_backend("bvh");
   backend->build(g);
-  const AcneCount c = count_self_hits(*backend, o + glm::vec3(0, 50, 0), o, 200.0f, [&](const Ray& r, const Hit& h) {
+  const AcneCount c = count_self_hits(*backend, o + glm::vec3(0, 50, 0), o, 200.0f, [&](const Ray&, const Hit& h) {
     // Barycentric reconstruction, as the integrator does for triangles.
     return (1.0f - h.u - h.v) * m.positions[0] + h.u * m.positions[2] + h.v * m.positions[1];
   });
