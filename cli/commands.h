@@ -18,5 +18,8 @@ using CommandRunner = std::function<int()>;
 void add_info_command(CLI::App& app, CommandRunner& run);
 void add_crosscheck_command(CLI::App& app, CommandRunner& run);
 void add_render_command(CLI::App& app, CommandRunner& run);
+void add_stress_command(CLI::App& app, CommandRunner& run);
+void add_converge_command(CLI::App& app, CommandRunner& run);
+void add_report_command(CLI::App& app, CommandRunner& run);
 
 }  // namespace twinray::cli

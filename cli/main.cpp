@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   add_info_command(app, run);
   add_crosscheck_command(app, run);
   add_render_command(app, run);
+  add_stress_command(app, run);
+  add_converge_command(app, run);
+  add_report_command(app, run);
 
   try {
     app.parse(argc, argv);
