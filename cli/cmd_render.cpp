@@ -145,7 +145,18 @@ int run_render(const RenderCommandOptions& opt) {
   const RenderFeatures& features = setup.features();
 
   const Image image = result.film.mean_image();
-  std::vector<std::string> written;
+  // A render's files form one result: when a later one cannot be written, the earlier ones are removed on
+  // the way out, so no partial set is left behind looking complete.
+  struct OutputSet {
+    std::vector<std::string> paths;
+    bool complete = false;
+    ~OutputSet() {
+      std::error_code ec;
+      if (!complete)
+        for (const std::string& p : paths) std::filesystem::remove(p, ec);
+    }
+  } outputs;
+  std::vector<std::string>& written = outputs.paths;
   if (!exr_out.empty()) {
     write_exr(exr_out, image);
     written.push_back(exr_out.string());
@@ -231,6 +242,7 @@ int run_render(const RenderCommandOptions& opt) {
                         {"queries", st.query.queries}};
     write_file_atomically(opt.json, j.dump(2) + "\n");
   }
+  outputs.complete = true;
   return kExitOk;
 }
 

@@ -244,10 +244,9 @@ TEST(BadInputTablePaths, UnreadableSceneFailsWithPermissionMessage) {
   std::filesystem::remove_all(dir);
 }
 
-// Known issue, reported to the owner of cli/cmd_render.cpp: when the EXR is written and then the PNG or
-// the JSON summary cannot be, the EXR stays behind (a partial result of a failed command, exit code 2).
-// Enable when fixed.
-TEST(BadInputTablePaths, DISABLED_NoExrLeftWhenALaterOutputCannotBeWritten) {
+// When the EXR is written and then the PNG or the JSON summary cannot be, the EXR must not stay behind
+// (it would be a partial result of a failed command).
+TEST(BadInputTablePaths, NoExrLeftWhenALaterOutputCannotBeWritten) {
   for (const char* later : {"--png {dir}/nofolder/out.png", "--json {dir}/f.txt/r.json"}) {
     const std::filesystem::path dir = write_files("later-output-fails", {{"s.json", scene(kSphere)}, {"f.txt", "x"}});
     const std::set<std::string> before = listing(dir);
