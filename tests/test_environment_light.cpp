@@ -8,6 +8,8 @@
 #include "core/sampling/rng.h"
 #include "core/util/input_error.h"
 
+#include "tests/chi_square.h"
+
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
@@ -24,35 +26,11 @@
 
 namespace twinray {
 namespace {
+
+using twinray::testing::chi_square_accepts;
 namespace fs = std::filesystem;
 constexpr double kPiD = std::numbers::pi;
 
-// Pearson's chi-square test at significance 1e-6 with pooling of bins expecting < 5 samples; see
-// test_warp.cpp for the reasoning behind the threshold. Samples in a bin of probability 0 fail outright.
-::testing::AssertionResult chi_square_accepts(const std::vector<double>& observed, const std::vector<double>& expected) {
-  double pooled_obs = 0.0, pooled_exp = 0.0, statistic = 0.0;
-  int bins = 0;
-  for (std::size_t i = 0; i < observed.size(); ++i) {
-    if (expected[i] == 0.0 && observed[i] > 0.0)
-      return ::testing::AssertionFailure() << observed[i] << " samples in bin " << i << " of probability 0";
-    if (expected[i] < 5.0) {
-      pooled_obs += observed[i];
-      pooled_exp += expected[i];
-      continue;
-    }
-    statistic += (observed[i] - expected[i]) * (observed[i] - expected[i]) / expected[i];
-    ++bins;
-  }
-  if (pooled_exp >= 5.0) {
-    statistic += (pooled_obs - pooled_exp) * (pooled_obs - pooled_exp) / pooled_exp;
-    ++bins;
-  }
-  const double dof = bins - 1;
-  const double a = 2.0 / (9.0 * dof);
-  const double critical = dof * std::pow(1.0 - a + 4.753424 * std::sqrt(a), 3.0);
-  if (statistic <= critical) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "chi-square " << statistic << " > critical " << critical << " (dof " << dof << ")";
-}
 
 // The documented convention, written out independently of the implementation: map column coordinate
 // u = 0.5 + phi / 2pi with phi = atan2(x, -z); v = theta / pi with theta measured from +Y.
