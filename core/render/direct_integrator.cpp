@@ -28,12 +28,7 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCount
       break;
     }
     const SurfacePoint sp = make_surface_point(ctx_, ray, hit);
-    if (depth == 1 && first != nullptr) {
-      first->hit = true;
-      first->normal = glm::dot(sp.ng, sp.wo) >= 0.0f ? sp.ng : -sp.ng;
-      first->albedo = sp.bsdf->albedo();
-      first->depth = hit.t;
-    }
+    if (depth == 1) record_first_hit(first, sp, hit.t);
     result += throughput * surface_emission(ctx_, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
     // The BSDF-sampled segment from the lit vertex exists only to find emission.
     if (lit_vertex_done) break;

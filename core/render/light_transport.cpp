@@ -51,6 +51,14 @@ SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const H
   return sp;
 }
 
+void record_first_hit(FirstHitInfo* first, const SurfacePoint& sp, float t) {
+  if (first == nullptr) return;
+  first->hit = true;
+  first->normal = glm::dot(sp.ng, sp.wo) >= 0.0f ? sp.ng : -sp.ng;
+  first->albedo = sp.bsdf->albedo();
+  first->depth = t;
+}
+
 Ray spawn_ray(const glm::vec3& p, const glm::vec3& ng, const glm::vec3& dir) {
   Ray r;
   r.org = offset_ray_origin(p, glm::dot(dir, ng) > 0.0f ? ng : -ng);

@@ -34,6 +34,9 @@ struct SurfacePoint {
 
 SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit);
 
+// Fills the auxiliary first-hit record (normal facing the viewer, albedo, depth) at the camera ray's hit.
+void record_first_hit(FirstHitInfo* first, const SurfacePoint& sp, float t);
+
 // A ray leaving p along unit direction dir, offset to the side of ng that dir points into.
 Ray spawn_ray(const glm::vec3& p, const glm::vec3& ng, const glm::vec3& dir);
 

@@ -27,12 +27,7 @@ glm::vec3 PathIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCounter
       break;
     }
     const SurfacePoint sp = make_surface_point(ctx_, ray, hit);
-    if (depth == 1 && first != nullptr) {
-      first->hit = true;
-      first->normal = glm::dot(sp.ng, sp.wo) >= 0.0f ? sp.ng : -sp.ng;
-      first->albedo = sp.bsdf->albedo();
-      first->depth = hit.t;
-    }
+    if (depth == 1) record_first_hit(first, sp, hit.t);
     result += throughput * surface_emission(ctx_, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
 
     if (settings_.max_depth >= 0 && depth >= settings_.max_depth) break;
