@@ -24,14 +24,10 @@ namespace {
 constexpr double kTestEffort = 0.05;
 
 // Findings of the catalogue that belong to other components, reported to their owners (see
-// docs/stress.md, "Open findings"). They are listed here by name rather than skipped silently; the
-// other backends still run these cases.
-const std::set<std::pair<std::string, std::string>> kOpenFindings = {
-    // Grazing plane of two 2000-unit triangles: brute, without box culling, re-hits the plane from
-    // spawned rays (the Wächter-Binder offset scales with |p|, the triangle test's error with the
-    // vertex magnitudes, 1000 times larger here).
-    {"lt-grazing", "brute"},
-};
+// docs/stress.md, "Open findings"), listed here by name rather than skipped silently; the other backends
+// still run these cases. Empty: lt-grazing on brute was fixed by scaling the spawn offset with the
+// vertex magnitudes (core/geometry/ray_offset.h).
+const std::set<std::pair<std::string, std::string>> kOpenFindings = {};
 
 struct Param {
   std::string case_name, backend;

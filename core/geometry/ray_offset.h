@@ -34,4 +34,17 @@ inline glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& n) {
   return result;
 }
 
+// The same for a point whose error is set by coordinates of magnitude `scale` larger than its own: the
+// middle of a triangle whose vertices lie far away (a 2000-unit ground plane seen near the origin) has
+// a reconstruction and intersection error of ulps of the *vertices*, not of the point. The result is the
+// Wächter-Binder point, or the point moved kIntScale ulps of `scale` along n when that is farther.
+inline glm::vec3 offset_ray_origin(const glm::vec3& p, const glm::vec3& n, float scale) {
+  constexpr float kIntScale = 256.0f;           // as above
+  constexpr float kUlpPerMagnitude = 0x1p-23f;  // one float ulp relative to the magnitude
+  const glm::vec3 q = offset_ray_origin(p, n);
+  const float min_offset = kIntScale * kUlpPerMagnitude * scale;
+  const float offset = (q.x - p.x) * n.x + (q.y - p.y) * n.y + (q.z - p.z) * n.z;
+  return offset >= min_offset ? q : p + min_offset * n;
+}
+
 }  // namespace twinray

@@ -50,7 +50,7 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCount
     prev_delta = bs->delta;
     prev_bsdf_pdf = bs->pdf;
     prev_p = sp.p;
-    ray = spawn_ray(sp.p, sp.ng, bs->wi);
+    ray = spawn_ray(sp, bs->wi);
     eta_scale *= bs->eta_ti * bs->eta_ti;
 
     // Delta chains can be endless (total internal reflection inside a glass box): the same Russian

@@ -7,6 +7,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -44,7 +45,12 @@ SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const H
   } else {
     const TriangleMesh& m = ctx.scene->geometry.meshes[ref.index];
     const glm::uvec3 tri = m.indices[hit.prim_id];
-    sp.p = (1.0f - hit.u - hit.v) * m.positions[tri.x] + hit.u * m.positions[tri.y] + hit.v * m.positions[tri.z];
+    const glm::vec3 &p0 = m.positions[tri.x], &p1 = m.positions[tri.y], &p2 = m.positions[tri.z];
+    sp.p = (1.0f - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
+    // The barycentric point and the triangle test err by ulps of the vertices, which may be far larger
+    // than the point's own coordinates.
+    const glm::vec3 m3 = glm::max(glm::abs(p0), glm::max(glm::abs(p1), glm::abs(p2)));
+    sp.error_scale = std::max(m3.x, std::max(m3.y, m3.z));
   }
   sp.material = &ctx.scene->material_of(hit.geom_id);
   sp.bsdf = &ctx.bsdf_of_geom[hit.geom_id];
@@ -59,9 +65,9 @@ void record_first_hit(FirstHitInfo* first, const SurfacePoint& sp, float t) {
   first->depth = t;
 }
 
-Ray spawn_ray(const glm::vec3& p, const glm::vec3& ng, const glm::vec3& dir) {
+Ray spawn_ray(const SurfacePoint& sp, const glm::vec3& dir) {
   Ray r;
-  r.org = offset_ray_origin(p, glm::dot(dir, ng) > 0.0f ? ng : -ng);
+  r.org = offset_ray_origin(sp.p, glm::dot(dir, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
   r.dir = dir;
   r.tmin = 0.0f;
   r.tmax = std::numeric_limits<float>::infinity();
@@ -90,9 +96,9 @@ glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, S
 
   Ray shadow;
   if (ls->is_environment) {
-    shadow = spawn_ray(sp.p, sp.ng, ls->wi);
+    shadow = spawn_ray(sp, ls->wi);
   } else {
-    shadow.org = offset_ray_origin(sp.p, glm::dot(ls->wi, sp.ng) > 0.0f ? sp.ng : -sp.ng);
+    shadow.org = offset_ray_origin(sp.p, glm::dot(ls->wi, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
     const glm::vec3 target =
         offset_ray_origin(ls->point, glm::dot(ls->wi, ls->normal) < 0.0f ? ls->normal : -ls->normal);
     const glm::vec3 d = target - shadow.org;

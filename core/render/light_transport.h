@@ -28,6 +28,7 @@ struct SurfacePoint {
   glm::vec3 p{0.0f};
   glm::vec3 ng{0.0f};  // unit geometric normal, as reported (never flipped)
   glm::vec3 wo{0.0f};  // unit, toward where the ray came from
+  float error_scale = 0.0f;  // magnitude of the coordinates p's error comes from (ray_offset.h); 0: p's own
   const Material* material = nullptr;
   const Bsdf* bsdf = nullptr;
 };
@@ -38,7 +39,8 @@ SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const H
 void record_first_hit(FirstHitInfo* first, const SurfacePoint& sp, float t);
 
 // A ray leaving p along unit direction dir, offset to the side of ng that dir points into.
-Ray spawn_ray(const glm::vec3& p, const glm::vec3& ng, const glm::vec3& dir);
+// A ray leaving the surface point in direction dir, its origin offset to dir's side (ray_offset.h).
+Ray spawn_ray(const SurfacePoint& sp, const glm::vec3& dir);
 
 // The MIS weight of emission reached by a BSDF-sampled ray (or by the camera ray: prev_delta = true),
 // given the BSDF's density for that direction and the light sampler's density for the same direction.

@@ -45,7 +45,7 @@ glm::vec3 PathIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCounter
     prev_delta = bs->delta;
     prev_bsdf_pdf = bs->pdf;
     prev_p = sp.p;
-    ray = spawn_ray(sp.p, sp.ng, bs->wi);
+    ray = spawn_ray(sp, bs->wi);
 
     if (depth >= settings_.rr_depth) {
       const float survival = std::min(max_component(throughput) * eta_scale, kMaxSurvival);
