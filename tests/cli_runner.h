@@ -14,8 +14,10 @@ struct CommandResult {
   std::string output;  // stdout and stderr, interleaved
 };
 
-inline CommandResult run_twinray(const std::string& args) {
-  const std::string command = std::string("CI=true '") + TWINRAY_BINARY + "' " + args + " 2>&1";
+// `wrapper` runs before the binary, e.g. "setpriv --reuid=65534 " to run it as another user.
+inline CommandResult run_twinray(const std::string& args, const std::string& wrapper = "") {
+  std::string command = "CI=true ";
+  command.append(wrapper).append("'").append(TWINRAY_BINARY).append("' ").append(args).append(" 2>&1");
   CommandResult result;
   std::FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return result;

@@ -230,16 +230,7 @@ TEST(BadInputTablePaths, UnreadableSceneFailsWithPermissionMessage) {
     prefix = "setpriv --reuid=65534 --regid=65534 --clear-groups ";
   }
   const std::set<std::string> before = listing(dir);
-  const std::string command = "CI=true " + prefix + "'" + std::string(TWINRAY_BINARY) + "' " +
-                              substitute(render("{dir}/s.json"), dir) + " 2>&1";
-  CommandResult r;
-  std::FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  char buffer[4096];
-  std::size_t n;
-  while ((n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  const CommandResult r = run_twinray(substitute(render("{dir}/s.json"), dir), prefix);
   expect_clean_failure(r, {"s.json", "ermission denied"}, before, dir);
   std::filesystem::remove_all(dir);
 }
