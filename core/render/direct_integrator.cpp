@@ -1,6 +1,7 @@
 #include "core/render/direct_integrator.h"
 
 #include "core/render/light_transport.h"
+#include "core/render/russian_roulette.h"
 
 #include <glm/geometric.hpp>
 
@@ -55,11 +56,7 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCount
 
     // Delta chains can be endless (total internal reflection inside a glass box): the same Russian
     // roulette as the path integrator ends them without bias.
-    if (depth >= settings_.rr_depth) {
-      const float survival = std::min(max_component(throughput) * eta_scale, kMaxSurvival);
-      if (!(rng.next_float() < survival)) break;
-      throughput /= survival;
-    }
+    if (!survive_roulette(depth, settings_.rr_depth, eta_scale, throughput, rng)) break;
   }
   return result;
 }

@@ -3,7 +3,8 @@
 // interface the renderer calls once per camera sample.
 //
 // Depth convention (Mitsuba 3): max_depth counts path segments, the camera ray being the first.
-//   1 = only emitters seen directly, 2 = plus direct lighting, -1 = unlimited (Russian roulette ends paths).
+//   1 = only emitters seen directly, 2 = plus direct lighting, -1 = unlimited (Russian roulette ends paths,
+//   see russian_roulette.h).
 // A shadow ray counts as the segment it completes: light sampling at the vertex reached by segment k
 // happens only when k + 1 <= max_depth.
 
@@ -30,10 +31,6 @@ enum class IntegratorKind { Direct, Path };
 //   Light light sampling only wherever a light can be sampled; emission reached by BSDF sampling still
 //         counts after specular bounces and on the camera ray (no light sample can produce those paths).
 enum class SamplingStrategy { Mis, Bsdf, Light };
-
-// Russian roulette survival probability cap: below 1 so that even a path whose throughput stays >= 1
-// (white furnace, total internal reflection) ends with probability 1.
-inline constexpr float kMaxSurvival = 0.95f;
 
 std::string_view to_string(IntegratorKind k);
 std::string_view to_string(SamplingStrategy s);

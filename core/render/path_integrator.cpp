@@ -1,6 +1,7 @@
 #include "core/render/path_integrator.h"
 
 #include "core/render/light_transport.h"
+#include "core/render/russian_roulette.h"
 
 #include <glm/geometric.hpp>
 
@@ -47,11 +48,7 @@ glm::vec3 PathIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCounter
     prev_p = sp.p;
     ray = spawn_ray(sp, bs->wi);
 
-    if (depth >= settings_.rr_depth) {
-      const float survival = std::min(max_component(throughput) * eta_scale, kMaxSurvival);
-      if (!(rng.next_float() < survival)) break;
-      throughput /= survival;
-    }
+    if (!survive_roulette(depth, settings_.rr_depth, eta_scale, throughput, rng)) break;
   }
   return result;
 }

@@ -5,8 +5,7 @@
 // taken; emission reached by the continuation is weighted against the light sample by the power heuristic
 // (SamplingStrategy::Mis). Delta vertices (mirror, glass) take no light sample, and emission seen after
 // them counts fully. Paths end at max_depth segments, when the BSDF absorbs, or by Russian roulette from
-// rr_depth segments on, with survival probability min(0.95, max(throughput) * eta^2) (the eta^2 undoes the
-// radiance scaling of refraction so paths inside glass are not killed for it).
+// rr_depth segments on (core/render/russian_roulette.h).
 
 #include "core/render/integrator.h"
 
