@@ -83,6 +83,9 @@ struct TreeChecker {
     const PrimitiveStore& store = bvh.primitives();
     const std::vector<PrimitiveKey>& keys = sphere ? store.sphere_keys : store.triangle_keys;
     ASSERT_LE(std::size_t{node.first_prim()} + count, keys.size());
+    if (!sphere) {
+      EXPECT_EQ(node.first_prim() % kTriangleBlockLanes, 0u) << "a triangle leaf starts a block";
+    }
     for (std::uint32_t i = node.first_prim(); i < node.first_prim() + count; ++i) {
       ++seen[{keys[i].geom_id, keys[i].prim_id}];
       EXPECT_TRUE(node_bounds(node).contains(primitive_bounds(keys[i], sphere))) << "leaf " << index;
@@ -108,14 +111,16 @@ void check_tree(const SceneGeometry& geometry, const BvhBuildOptions& options, c
 
   // The leaf-ordered copy is bit-identical to the scene's geometry.
   const PrimitiveStore& store = bvh.primitives();
-  for (std::size_t i = 0; i < store.triangles.size(); ++i) {
-    const PrimitiveKey key = store.triangle_keys[i];
+  ASSERT_EQ(store.triangle_keys.size(), store.triangle_blocks.size() * kTriangleBlockLanes);
+  for (std::uint32_t slot = 0; slot < store.triangle_keys.size(); ++slot) {
+    const PrimitiveKey key = store.triangle_keys[slot];
+    if (key.is_padding()) continue;
     for (const TriangleMesh& m : geometry.meshes) {
       if (m.geom_id != key.geom_id) continue;
       const glm::uvec3 tri = m.indices[key.prim_id];
-      EXPECT_EQ(store.triangles[i].p0, m.positions[tri.x]);
-      EXPECT_EQ(store.triangles[i].p1, m.positions[tri.y]);
-      EXPECT_EQ(store.triangles[i].p2, m.positions[tri.z]);
+      EXPECT_EQ(store.triangle_vertex(slot, 0), m.positions[tri.x]);
+      EXPECT_EQ(store.triangle_vertex(slot, 1), m.positions[tri.y]);
+      EXPECT_EQ(store.triangle_vertex(slot, 2), m.positions[tri.z]);
     }
   }
 

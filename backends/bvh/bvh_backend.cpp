@@ -3,6 +3,7 @@
 #include "backends/bvh/bvh_builder.h"
 #include "backends/bvh/bvh_traversal.h"
 
+#include <algorithm>
 #include <chrono>
 
 namespace twinray {
@@ -40,12 +41,11 @@ void BvhBackend::build(const SceneGeometry& geometry) {
       triangle_source.push_back({&mesh, static_cast<std::uint32_t>(i)});
 
   prims_ = PrimitiveStore{};
-  prims_.triangles.reserve(n_triangles);
-  prims_.triangle_keys.reserve(n_triangles);
   prims_.spheres.reserve(geometry.sphere_count());
   prims_.sphere_keys.reserve(geometry.sphere_count());
   // Leaves appear in depth-first order with increasing ranges of prim_order; each is appended to its
-  // kind's array and its offset rebased to that array.
+  // kind's array and its offset rebased to that array. A triangle leaf starts a new block of four and pads
+  // its last block with copies of its last triangle (masked off in traversal, see primitive_store.h).
   for (BvhNode& node : tree.nodes) {
     if (!node.is_leaf()) continue;
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -57,16 +57,22 @@ void BvhBackend::build(const SceneGeometry& geometry) {
         prims_.sphere_keys.push_back({s.geom_id, 0});
       }
     } else {
-      node.offset = static_cast<std::uint32_t>(prims_.triangles.size());
-      for (std::uint32_t k = first; k < first + count; ++k) {
-        const TriangleSource& src = triangle_source[tree.prim_order[k]];
+      node.offset = static_cast<std::uint32_t>(prims_.triangle_keys.size());
+      const std::uint32_t slots = (count + kTriangleBlockLanes - 1) / kTriangleBlockLanes * kTriangleBlockLanes;
+      for (std::uint32_t j = 0; j < slots; ++j) {
+        const std::uint32_t lane = j % kTriangleBlockLanes;
+        if (lane == 0) prims_.triangle_blocks.emplace_back();
+        const TriangleSource& src = triangle_source[tree.prim_order[first + std::min(j, count - 1)]];
         const glm::uvec3& tri = src.mesh->indices[src.index];
         const std::vector<glm::vec3>& p = src.mesh->positions;
-        prims_.triangles.push_back({p[tri.x], p[tri.y], p[tri.z]});
-        prims_.triangle_keys.push_back({src.mesh->geom_id, src.index});
+        prims_.triangle_blocks.back().set(lane, p[tri.x], p[tri.y], p[tri.z]);
+        prims_.triangle_keys.push_back(j < count ? PrimitiveKey{src.mesh->geom_id, src.index}
+                                                 : PrimitiveKey{PrimitiveKey::kPadding, PrimitiveKey::kPadding});
       }
     }
   }
+  prims_.triangle_blocks.shrink_to_fit();
+  prims_.triangle_keys.shrink_to_fit();
   nodes_ = std::move(tree.nodes);
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();

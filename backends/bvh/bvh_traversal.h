@@ -13,12 +13,14 @@
 #include "backends/bvh/bvh_node.h"
 #include "backends/bvh/primitive_store.h"
 #include "backends/bvh/ray_box.h"
+#include "backends/bvh/triangle_block.h"
 #include "core/backend/backend.h"
 #include "core/geometry/hit.h"
 #include "core/geometry/ray.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -35,6 +37,11 @@ struct StackEntry {
   std::uint32_t node;
   float entry;  // where the ray enters the node's box
 };
+
+// The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
+inline unsigned lane_mask(std::uint32_t remaining) {
+  return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
+}
 
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
 inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
@@ -101,19 +108,22 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
     prims_tested += count;
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
-      for (std::uint32_t i = first; i < first + count; ++i) {
-        const StoredTriangle& tri = prims.triangles[i];
-        float t, u, v;
-        if (!intersect_triangle(tri_ray, tri.p0, tri.p1, tri.p2, ray.tmin, tmax, t, u, v)) continue;
-        const PrimitiveKey key = prims.triangle_keys[i];
-        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
-        hit.t = tmax = t;
-        hit.u = u;
-        hit.v = v;
-        hit.geom_id = key.geom_id;
-        hit.prim_id = key.prim_id;
-        best_is_sphere = false;
-        best_index = i;
+      for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
+        BlockHits found;
+        unsigned hits = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
+                                                 ray.tmin, tmax, found);
+        for (; hits != 0; hits &= hits - 1) {
+          const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
+          const PrimitiveKey key = prims.triangle_keys[slot + lane];
+          if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
+          hit.t = tmax = found.t[lane];
+          hit.u = found.u[lane];
+          hit.v = found.v[lane];
+          hit.geom_id = key.geom_id;
+          hit.prim_id = key.prim_id;
+          best_is_sphere = false;
+          best_index = slot + lane;
+        }
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count; ++i) {
@@ -141,8 +151,8 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    const StoredTriangle& tri = prims.triangles[best_index];
-    hit.ng = triangle_geometric_normal(tri.p0, tri.p1, tri.p2);
+    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
+                                       prims.triangle_vertex(best_index, 2));
   }
   return true;
 }
@@ -174,11 +184,12 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
-      for (std::uint32_t i = first; i < first + count && !found; ++i) {
-        ++prims_tested;
-        const StoredTriangle& tri = prims.triangles[i];
-        float t, u, v;
-        found = intersect_triangle(tri_ray, tri.p0, tri.p1, tri.p2, ray.tmin, ray.tmax, t, u, v);
+      for (std::uint32_t slot = first; slot < first + count && !found; slot += kTriangleBlockLanes) {
+        const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
+        prims_tested += in_block;
+        BlockHits unused;
+        found = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
+                                         unused) != 0;
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {

@@ -2,9 +2,11 @@
 // The BVH's private copy of the geometry, in leaf order.
 //
 // Primitives are reordered once, at build time, so that the primitives of a leaf are adjacent in memory and
-// a leaf test streams through one contiguous block: triangles as their three vertices (no index
-// indirection), spheres as center and radius. Ids, which only the winning hit needs, live in parallel
-// arrays so they do not dilute the cache lines the tests read.
+// a leaf test streams through one contiguous block. Triangles are stored four to a TriangleBlock, in
+// structure-of-arrays form, so that one SIMD watertight test covers four triangles (triangle_block.h);
+// each leaf starts a new block, and the unused lanes of its last block repeat its last triangle and are
+// masked off. Spheres are stored as center and radius. Ids, which only the winning hit needs, live in
+// parallel arrays so they do not dilute the cache lines the tests read.
 //
 // Vertices are copied bit for bit from the SceneGeometry: the watertight test relies on neighbouring
 // triangles seeing identical coordinates for shared vertices, and the bvh must produce exactly the t, u, v
@@ -14,14 +16,28 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace twinray {
 
-struct StoredTriangle {
-  glm::vec3 p0, p1, p2;
+inline constexpr std::uint32_t kTriangleBlockLanes = 4;
+
+// Four triangles: v[vertex][axis][lane]. 144 bytes, 16-byte aligned so each (vertex, axis) row is one
+// aligned SSE load.
+struct alignas(16) TriangleBlock {
+  float v[3][3][kTriangleBlockLanes];
+
+  glm::vec3 vertex(std::uint32_t vert, std::uint32_t lane) const {
+    return {v[vert][0][lane], v[vert][1][lane], v[vert][2][lane]};
+  }
+  void set(std::uint32_t lane, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
+    const glm::vec3* p[3] = {&p0, &p1, &p2};
+    for (std::uint32_t vert = 0; vert < 3; ++vert)
+      for (std::uint32_t axis = 0; axis < 3; ++axis) v[vert][axis][lane] = (*p[vert])[static_cast<int>(axis)];
+  }
 };
-static_assert(sizeof(StoredTriangle) == 36);
+static_assert(sizeof(TriangleBlock) == 144);
 
 struct StoredSphere {
   glm::vec3 center;
@@ -31,18 +47,27 @@ static_assert(sizeof(StoredSphere) == 16);
 
 // Where a stored primitive came from.
 struct PrimitiveKey {
+  static constexpr std::uint32_t kPadding = std::numeric_limits<std::uint32_t>::max();
   std::uint32_t geom_id;
   std::uint32_t prim_id;
+  bool is_padding() const { return geom_id == kPadding; }
 };
 
 struct PrimitiveStore {
-  std::vector<StoredTriangle> triangles;
-  std::vector<PrimitiveKey> triangle_keys;  // parallel to `triangles`
+  // Triangle slot s is lane s % 4 of block s / 4. A triangle leaf's `first_prim` is a slot at the start of
+  // a block.
+  std::vector<TriangleBlock> triangle_blocks;
+  std::vector<PrimitiveKey> triangle_keys;  // per slot; padding lanes hold kPadding
   std::vector<StoredSphere> spheres;
   std::vector<PrimitiveKey> sphere_keys;    // parallel to `spheres`
 
+  const TriangleBlock& block_of(std::uint32_t slot) const { return triangle_blocks[slot / kTriangleBlockLanes]; }
+  glm::vec3 triangle_vertex(std::uint32_t slot, std::uint32_t vert) const {
+    return block_of(slot).vertex(vert, slot % kTriangleBlockLanes);
+  }
+
   std::size_t memory_bytes() const {
-    return triangles.capacity() * sizeof(StoredTriangle) + triangle_keys.capacity() * sizeof(PrimitiveKey) +
+    return triangle_blocks.capacity() * sizeof(TriangleBlock) + triangle_keys.capacity() * sizeof(PrimitiveKey) +
            spheres.capacity() * sizeof(StoredSphere) + sphere_keys.capacity() * sizeof(PrimitiveKey);
   }
 };
