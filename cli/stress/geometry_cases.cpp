@@ -86,7 +86,13 @@ Outcome grid_edges_vertices(const std::string& backend_name, const StressOptions
   const auto backend = build_backend(backend_name, geometry);
   const glm::vec3 directions[] = {{0.0f, 0.0f, -1.0f}, {0.25f, 0.125f, -1.0f}, {-0.5f, 0.25f, -1.0f},
                                   {0.125f, -0.375f, -1.0f}};
-  std::size_t rays = 0, lost = 0, doubled = 0;
+  // Backends that honour ties own every edge and vertex uniquely (the fill rule), so for them a second
+  // report of the same point is a double hit. Embree does not claim that: its robust kernels accept an edge
+  // for both triangles and, on AVX2 kernels, return t one ulp apart for the two faces of the box's rim
+  // (on the plane grid, same-plane triangles round t alike). Those same-point duplicates are reported for it,
+  // not counted; a second crossing further away is a double hit for every backend.
+  const bool unique_edges = backend->traits().honours_ties;
+  std::size_t rays = 0, lost = 0, doubled = 0, same_point = 0;
   for (int dir_index = 0; dir_index < 4; ++dir_index) {
     const glm::vec3 d = directions[dir_index];
     const bool axis_aligned = dir_index == 0;
@@ -102,10 +108,12 @@ Outcome grid_edges_vertices(const std::string& backend_name, const StressOptions
         Ray ray;
         ray.org = target - 8.0f * d;
         ray.dir = d;
-        const int n = count_crossings(*backend, ray);
+        const Crossings c = classify_crossings(*backend, ray);
+        const int n = c.distinct + (unique_edges ? c.same_point_duplicates : 0);
         ++rays;
-        lost += n < 2 ? 1 : 0;
+        lost += c.distinct < 2 ? 1 : 0;
         doubled += n > 2 ? 1 : 0;
+        same_point += c.same_point_duplicates > 0 ? 1 : 0;
       }
   }
   // The open plane grid too, from above and below (back faces): exactly one crossing.
@@ -126,10 +134,11 @@ Outcome grid_edges_vertices(const std::string& backend_name, const StressOptions
         }
       }
   out.status = lost + doubled + plane_bad == 0 ? Status::Pass : Status::Fail;
-  out.figures = fmt::format("box: {} rays, {} lost, {} double; plane: {} rays, {} wrong", rays, lost, doubled,
+  out.figures = fmt::format("box: {} rays, {} lost, {} double, {} same-point duplicates{}; plane: {} rays, {} wrong",
+                            rays, lost, doubled, same_point, unique_edges ? "" : " (allowed: no unique edge ownership)",
                             plane_rays, plane_bad);
-  out.json = {{"box_rays", rays}, {"lost", lost}, {"double", doubled}, {"plane_rays", plane_rays},
-              {"plane_wrong", plane_bad}};
+  out.json = {{"box_rays", rays}, {"lost", lost}, {"double", doubled}, {"same_point_duplicates", same_point},
+              {"plane_rays", plane_rays}, {"plane_wrong", plane_bad}};
   set_requirement(out, backend_name, backend->traits().watertight, "watertightness");
   return out;
 }
@@ -158,7 +167,9 @@ Outcome axis_aligned_signed_zero(const std::string& backend_name, const StressOp
     ray.org = {x, y, 2.0f};
     ray.dir = {(i & 1) ? nz : pz, (i & 2) ? nz : pz, -1.0f};
     Hit hit;
-    flat.check(grid_backend->intersect(ray, hit) && hit.t == 2.0f);
+    // The exact answer is t = 2. bvh and brute return exactly 2; Embree's AVX2 kernels return 2 - 1 ulp.
+    // What this checks is that the hit is found with signed-zero components, so t may be a few ulps off.
+    flat.check(grid_backend->intersect(ray, hit) && std::abs(hit.t - 2.0f) <= kSamePointUlps * 0x1p-22f);
   }
   // (b) a closed box [0,4]^3. Origins exactly on a face, going in (with +-0 in the other components): the
   // hit must be found, at t = 0 (the face itself) or at the opposite face. Rays running *inside* a face
@@ -221,7 +232,7 @@ Outcome axis_aligned_signed_zero(const std::string& backend_name, const StressOp
   const bool ok = flat.failures == 0 && on_face.failures == 0 && no_cliff &&
                   (!same_triangle_test || in_plane.failures == 0);
   out.status = ok ? Status::Pass : Status::Fail;
-  out.figures = fmt::format("flat {}/{} missed, on-face {}/{} wrong, in-plane {}/{} differ from brute{}, "
+  out.figures = fmt::format("flat {}/{} missed (or t off by more than 4 ulps), on-face {}/{} wrong, in-plane {}/{} differ from brute{}, "
                             "cost axis/tilted {}", flat.failures, flat.rays, on_face.failures, on_face.rays,
                             in_plane.failures, in_plane.rays, same_triangle_test ? "" : " (not judged)",
                             counts ? fmt::format("{:.3f} ({:.1f} vs {:.1f} per ray)", ratio,

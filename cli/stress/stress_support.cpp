@@ -44,6 +44,22 @@ int count_crossings(const Backend& backend, Ray ray, int limit) {
   return crossings;
 }
 
+Crossings classify_crossings(const Backend& backend, Ray ray, int limit) {
+  Crossings c;
+  Hit hit;
+  float previous = -std::numeric_limits<float>::infinity();
+  for (int n = 0; n < limit && backend.intersect(ray, hit); ++n) {
+    float near_limit = previous;
+    for (int i = 0; i < kSamePointUlps; ++i) near_limit = std::nextafter(near_limit, std::numeric_limits<float>::infinity());
+    if (hit.t <= near_limit) ++c.same_point_duplicates;
+    else ++c.distinct;
+    previous = hit.t;
+    ray.tmin = std::nextafter(hit.t, std::numeric_limits<float>::infinity());
+    if (!(ray.tmin <= ray.tmax)) break;
+  }
+  return c;
+}
+
 TriangleMesh integer_box_mesh(int lo, int hi, std::uint32_t geom_id) {
   TriangleMesh mesh;
   mesh.geom_id = geom_id;

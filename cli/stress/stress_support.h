@@ -32,6 +32,16 @@ std::size_t scaled(std::size_t count, const StressOptions& options, std::size_t 
 // closest-hit query cannot tell them apart), which is what "crossing" means. Stops at `limit`.
 int count_crossings(const Backend& backend, Ray ray, int limit = 16);
 
+// Crossings of a ray through a surface, split into distinct ones and same-point duplicates: a hit whose t
+// is within kSamePointUlps ulps of the previous hit's is the same surface point reported by a second
+// triangle (two faces meeting at an edge the ray passes through).
+inline constexpr int kSamePointUlps = 4;
+struct Crossings {
+  int distinct = 0;
+  int same_point_duplicates = 0;
+};
+Crossings classify_crossings(const Backend& backend, Ray ray, int limit = 16);
+
 // A closed axis-aligned box [lo, hi]^3 (integer corners), each face split into unit squares, two
 // triangles each, counter-clockwise seen from outside. Vertices on shared edges are bit-identical
 // (integers), so the mesh is closed even though faces do not share vertex indices.
