@@ -1,5 +1,7 @@
 #include "backends/bvh/bvh_builder.h"
 
+#include "backends/bvh/primitive_store.h"
+
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -37,7 +39,17 @@ struct PrimRef {
 struct Bin {
   Bounds3 box;
   std::uint32_t count = 0;
+  std::uint32_t second_kind = 0;  // of `count`, how many are spheres
 };
+
+// Primitive tests a leaf of `count` primitives costs, `second_kind` of them spheres: triangles are tested
+// four at a time (triangle_block.h), so a leaf of 1..4 triangles costs one test, 5..8 two; spheres one
+// each. Counting blocks rather than triangles is what lets the SAH stop at full blocks instead of
+// splitting them (Embree's builders count SIMD blocks the same way).
+inline float leaf_tests(std::uint32_t count, std::uint32_t second_kind) {
+  const std::uint32_t triangles = count - second_kind;
+  return static_cast<float>((triangles + kTriangleBlockLanes - 1) / kTriangleBlockLanes + second_kind);
+}
 
 struct Split {
   enum class Kind { None, Bin, ObjectMedian, ByKind } kind = Kind::None;
@@ -67,7 +79,7 @@ class Builder {
     const std::size_t node_index = out.size();
     out.push_back(BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0});
 
-    const Split split = choose_split(begin, end, box, centroids, depth, mixed);
+    const Split split = choose_split(begin, end, box, centroids, depth, mixed, static_cast<std::uint32_t>(second_kind));
     if (split.kind == Split::Kind::None) {
       out[node_index].count = static_cast<std::uint32_t>(n) | (second_kind == n ? BvhNode::kSphereLeafBit : 0u);
       return;
@@ -98,7 +110,7 @@ class Builder {
   }
 
   Split choose_split(std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
-                     std::size_t depth, bool mixed) const {
+                     std::size_t depth, bool mixed, std::uint32_t second_kind) const {
     const std::size_t n = end - begin;
     const bool fits_leaf = n <= static_cast<std::size_t>(o_.max_leaf_size);
     if (n == 1 || (fits_leaf && !mixed && (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth)))
@@ -115,7 +127,7 @@ class Builder {
     // Compare with stopping here: both costs per unit of this node's area.
     const float area = box.half_area();
     const float split_cost = area > 0.0f ? o_.traversal_cost + o_.intersection_cost * best.cost / area : INFINITY;
-    const float leaf_cost = o_.intersection_cost * static_cast<float>(n);
+    const float leaf_cost = o_.intersection_cost * leaf_tests(static_cast<std::uint32_t>(n), second_kind);
     if (fits_leaf && leaf_cost <= split_cost) return {};
     return best;
   }
@@ -127,7 +139,7 @@ class Builder {
   }
 
   // On each axis, bins the centroids and sweeps the bins-1 planes between them. Split::cost is the
-  // un-normalized sum area(L) n(L) + area(R) n(R).
+  // un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted as in leaf_tests.
   Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
     const int bins = o_.bins;
     Split best;
@@ -140,23 +152,27 @@ class Builder {
         Bin& b = bin[static_cast<std::size_t>(bin_of(refs_[i].centroid[axis], centroids.lo[axis], scale, bins))];
         b.box.extend(refs_[i].box);
         ++b.count;
+        b.second_kind += refs_[i].id >= second_kind_begin_ ? 1u : 0u;
       }
-      // right_cost[k] = area * count of bins [k, bins)
+      // right_cost[k] = area * primitive tests of bins [k, bins)
       std::array<float, kMaxBins> right_cost{};
       Bounds3 acc;
-      std::uint32_t count = 0;
+      std::uint32_t count = 0, second = 0;
       for (int k = bins - 1; k > 0; --k) {
         acc.extend(bin[static_cast<std::size_t>(k)].box);
         count += bin[static_cast<std::size_t>(k)].count;
-        right_cost[static_cast<std::size_t>(k)] = count > 0 ? acc.half_area() * static_cast<float>(count) : INFINITY;
+        second += bin[static_cast<std::size_t>(k)].second_kind;
+        right_cost[static_cast<std::size_t>(k)] = count > 0 ? acc.half_area() * leaf_tests(count, second) : INFINITY;
       }
       acc = Bounds3{};
       count = 0;
+      second = 0;
       for (int k = 1; k < bins; ++k) {
         acc.extend(bin[static_cast<std::size_t>(k - 1)].box);
         count += bin[static_cast<std::size_t>(k - 1)].count;
+        second += bin[static_cast<std::size_t>(k - 1)].second_kind;
         if (count == 0) continue;
-        const float cost = acc.half_area() * static_cast<float>(count) + right_cost[static_cast<std::size_t>(k)];
+        const float cost = acc.half_area() * leaf_tests(count, second) + right_cost[static_cast<std::size_t>(k)];
         if (cost < best.cost) best = {Split::Kind::Bin, axis, k, cost};
       }
     }
@@ -236,7 +252,9 @@ double sah_cost(std::span<const BvhNode> nodes, const BvhBuildOptions& options) 
   double cost = 0.0;
   for (const BvhNode& n : nodes) {
     const double weight = root_area > 0.0 ? area(n) / root_area : 1.0;
-    cost += weight * (n.is_leaf() ? options.intersection_cost * static_cast<double>(n.prim_count()) : options.traversal_cost);
+    const std::uint32_t spheres = n.is_sphere_leaf() ? n.prim_count() : 0u;
+    cost += weight * (n.is_leaf() ? options.intersection_cost * static_cast<double>(leaf_tests(n.prim_count(), spheres))
+                                  : options.traversal_cost);
   }
   return cost;
 }

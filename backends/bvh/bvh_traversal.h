@@ -61,8 +61,8 @@ inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const B
   const std::uint32_t left = index + 1;
   const std::uint32_t right = nodes[index].second_child();
   float entry_left = 0.0f, entry_right = 0.0f;
-  const bool hit_left = intersect_box(nodes[left], box_ray, tmin, tmax, entry_left);
-  const bool hit_right = intersect_box(nodes[right], box_ray, tmin, tmax, entry_right);
+  const unsigned hits = intersect_box_pair(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
+  const bool hit_left = (hits & 1u) != 0, hit_right = (hits & 2u) != 0;
   if (hit_left && hit_right) {
     const bool left_first = entry_left <= entry_right;
     stack[size++] = left_first ? StackEntry{right, entry_right} : StackEntry{left, entry_left};

@@ -23,6 +23,9 @@
 #include "core/geometry/ray.h"
 
 #include <emmintrin.h>
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 
 #include <cmath>
 #include <limits>
@@ -38,6 +41,7 @@ struct BoxRay {
   __m128 inv_dir;   // (1/x, 1/y, 1/z, NaN); 1/(+-0) = +-inf
   __m128 negative;  // all-ones lanes where the direction's sign bit is set (-0 included): near plane = hi
 
+  BoxRay() = default;
   explicit BoxRay(const Ray& ray) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float ix = 1.0f / ray.dir.x, iy = 1.0f / ray.dir.y, iz = 1.0f / ray.dir.z;
@@ -45,11 +49,21 @@ struct BoxRay {
     inv_dir = _mm_setr_ps(ix, iy, iz, nan);
     const auto mask = [](float v) { return std::signbit(v) ? -1 : 0; };
     negative = _mm_castsi128_ps(_mm_setr_epi32(mask(ix), mask(iy), mask(iz), 0));
+#if defined(__AVX__)
+    org2 = _mm256_set_m128(org, org);
+    inv_dir2 = _mm256_set_m128(inv_dir, inv_dir);
+    negative2 = _mm256_set_m128(negative, negative);
+#endif
   }
+
+#if defined(__AVX__)
+  // The same three vectors twice, for testing two boxes at once (intersect_box_pair).
+  __m256 org2, inv_dir2, negative2;
+#endif
 };
 
 // True when the ray overlaps the node's box within [tmin, tmax] (closed); `entry` is where it enters.
-inline bool intersect_box(const BvhNode& node, const BoxRay& r, float tmin, float tmax, float& entry) {
+[[gnu::always_inline]] inline bool intersect_box(const BvhNode& node, const BoxRay& r, float tmin, float tmax, float& entry) {
   // 16-byte loads: (lo, offset) and (hi, count); the integer lane is neutralised (see above).
   const __m128 lo = _mm_load_ps(&node.lo.x);
   const __m128 hi = _mm_load_ps(&node.hi.x);
@@ -68,6 +82,36 @@ inline bool intersect_box(const BvhNode& node, const BoxRay& r, float tmin, floa
   t1 = _mm_min_ss(t1, _mm_shuffle_ps(t1, t1, 1));
   entry = _mm_cvtss_f32(t0);
   return entry <= _mm_cvtss_f32(t1);
+}
+
+// Both children of an interior node at once: the test above, lane for lane, on the two boxes side by side
+// in one AVX register (low half: a, high half: b), so the entries are bit-identical to two single tests.
+// Returns a bit mask: 1 when a is hit, 2 when b is hit.
+[[gnu::always_inline]] inline unsigned intersect_box_pair(const BvhNode& a, const BvhNode& b, const BoxRay& r,
+                                                          float tmin, float tmax, float& entry_a, float& entry_b) {
+#if defined(__AVX__)
+  const __m256 lo = _mm256_set_m128(_mm_load_ps(&b.lo.x), _mm_load_ps(&a.lo.x));
+  const __m256 hi = _mm256_set_m128(_mm_load_ps(&b.hi.x), _mm_load_ps(&a.hi.x));
+  const __m256 near_plane = _mm256_blendv_ps(lo, hi, r.negative2);
+  const __m256 far_plane = _mm256_blendv_ps(hi, lo, r.negative2);
+  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, r.org2), r.inv_dir2);
+  const __m256 t_far =
+      _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(far_plane, r.org2), r.inv_dir2), _mm256_set1_ps(kSlabFarScale));
+  // Operand order matters: the NaN-free bound is the second operand (see above).
+  __m256 t0 = _mm256_max_ps(t_near, _mm256_set1_ps(tmin));
+  __m256 t1 = _mm256_min_ps(t_far, _mm256_set1_ps(tmax));
+  // Horizontal max / min within each 128-bit half.
+  t0 = _mm256_max_ps(t0, _mm256_permute_ps(t0, _MM_SHUFFLE(1, 0, 3, 2)));
+  t0 = _mm256_max_ps(t0, _mm256_permute_ps(t0, _MM_SHUFFLE(2, 3, 0, 1)));
+  t1 = _mm256_min_ps(t1, _mm256_permute_ps(t1, _MM_SHUFFLE(1, 0, 3, 2)));
+  t1 = _mm256_min_ps(t1, _mm256_permute_ps(t1, _MM_SHUFFLE(2, 3, 0, 1)));
+  entry_a = _mm256_cvtss_f32(t0);
+  entry_b = _mm_cvtss_f32(_mm256_extractf128_ps(t0, 1));
+  const unsigned hit = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
+  return (hit & 1u) | ((hit >> 3) & 2u);
+#else
+  return (intersect_box(a, r, tmin, tmax, entry_a) ? 1u : 0u) | (intersect_box(b, r, tmin, tmax, entry_b) ? 2u : 0u);
+#endif
 }
 
 }  // namespace twinray

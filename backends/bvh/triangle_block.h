@@ -23,7 +23,7 @@ struct alignas(16) BlockHits {
 
 // Tests the lanes of `block` set in `lanes` (bit i = lane i). Returns the mask of lanes hit within
 // [tmin, tmax] and their t, u, v in `out`.
-inline unsigned intersect_triangle_block(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
+[[gnu::always_inline]] inline unsigned intersect_triangle_block(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
                                          float tmin, float tmax, BlockHits& out) {
   const auto row = [&](int vert, int axis) { return _mm_load_ps(block.v[vert][axis]); };
   const __m128 ox = _mm_set1_ps(ray.ox), oy = _mm_set1_ps(ray.oy), oz = _mm_set1_ps(ray.oz);
