@@ -2,6 +2,7 @@
 
 #include "backends/bvh/bvh_builder.h"
 #include "backends/bvh/bvh_traversal.h"
+#include "backends/bvh/ray_order.h"
 
 #include <algorithm>
 #include <chrono>
@@ -119,6 +120,19 @@ bool BvhBackend::occluded(const Ray& ray, QueryStats* stats) const {
     case Kinds::None: break;
   }
   return false;
+}
+
+void BvhBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {
+  if (nodes_.empty()) return Backend::intersect(rays, hits, stats);
+  // Traced in the Morton order of their origins (ray_order.h); each answer lands in its ray's slot.
+  const Bounds3 bounds{nodes_[0].lo, nodes_[0].hi};
+  for (const std::uint32_t i : morton_ray_order(rays, bounds)) intersect(rays[i], hits[i], stats);
+}
+
+void BvhBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) const {
+  if (nodes_.empty()) return Backend::occluded(rays, occluded, stats);
+  const Bounds3 bounds{nodes_[0].lo, nodes_[0].hi};
+  for (const std::uint32_t i : morton_ray_order(rays, bounds)) occluded[i] = this->occluded(rays[i], stats) ? 1 : 0;
 }
 
 std::unique_ptr<Backend> make_bvh_backend(const BvhBuildOptions& options) { return std::make_unique<BvhBackend>(options); }

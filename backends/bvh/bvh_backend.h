@@ -25,8 +25,10 @@ class BvhBackend final : public Backend {
 
   bool intersect(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const override;
   bool occluded(const Ray& ray, QueryStats* stats = nullptr) const override;
-  using Backend::intersect;
-  using Backend::occluded;
+  // A batch is traced in the Morton order of its ray origins (ray_order.h): same answers as a loop of
+  // single-ray calls, fewer cache misses on incoherent rays.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const override;
+  void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats = nullptr) const override;
 
   // Read-only access to the tree, for tests and tools.
   const BvhBuildOptions& options() const { return options_; }
