@@ -1,33 +1,25 @@
 #!/usr/bin/env bash
-# Fuzzes the input loaders with libFuzzer (clang from Debian) under AddressSanitizer + UBSan.
+# Fuzzes the input loaders with libFuzzer (clang 14 from Debian) under AddressSanitizer + UBSan.
 #
-#   scripts/fuzz.sh [SECONDS] [TARGET...]     SECONDS per target (default 60); targets default to all of
-#                                              fuzz_scene_json fuzz_obj fuzz_ply, run one after the other.
+#   scripts/fuzz.sh [SECONDS] [TARGET...]     SECONDS of wall time (default 60); targets default to all of
+#                                              fuzz_scene_json fuzz_obj fuzz_ply, which run concurrently
+#                                              (TWINRAY_FUZZ_SEQUENTIAL=1 runs them one after the other).
 #
-# Builds in build-fuzz/ (TWINRAY_FUZZ_BUILD_DIR overrides), separate from the Release build. The seed corpus
-# is made afresh on every run from scenes/*.json and small meshes written below (no binary blobs in the
-# repository); what the fuzzer discovers accumulates in build-fuzz/corpus/TARGET and is reused next time.
-# A crash, sanitizer report, leak, timeout (> 10 s for one input) or out-of-memory (> 2 GiB) leaves its
-# input in build-fuzz/artifacts/TARGET/ and makes the script exit 1.
+# Uses the instrumented tree in build-asan/ (scripts/configure-asan.sh, shared with scripts/sanitize.sh;
+# TWINRAY_ASAN_BUILD_DIR overrides). The seed corpus is made afresh on every run from scenes/*.json and
+# small meshes written below (no binary blobs in the repository); what the fuzzer discovers accumulates in
+# build-asan/corpus/TARGET and is reused next time. A crash, sanitizer report, leak, timeout (> 10 s for one
+# input) or out-of-memory (> 2 GiB) leaves its input in build-asan/artifacts/TARGET/ and makes the script
+# exit 1.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${TWINRAY_FUZZ_BUILD_DIR:-$root/build-fuzz}"
+build="${TWINRAY_ASAN_BUILD_DIR:-$root/build-asan}"
 seconds="${1:-60}"
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene_json fuzz_obj fuzz_ply)
 
-if ! command -v clang++-14 >/dev/null ||
-   ! ls /usr/lib/llvm-14/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
-  echo "fuzz.sh: installing clang-14 and libclang-rt-14-dev"
-  apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq clang-14 libclang-rt-14-dev >/dev/null
-fi
-
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 \
-  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTWINRAY_FUZZ=ON -DTWINRAY_SANITIZE=address,undefined \
-  -DTWINRAY_BUILD_TESTS=OFF -DTWINRAY_BUILD_BENCH=OFF >/dev/null
-cmake --build "$build" -j "${TWINRAY_FUZZ_JOBS:-2}" --target "${targets[@]}"
+bash "$root/scripts/configure-asan.sh" "${targets[@]}"
 
 # --- seed corpus, made at run time -------------------------------------------------------------------
 seeds="$build/seeds"
@@ -72,22 +64,38 @@ for word in camera materials shapes environment render type mesh sphere file pos
 done
 
 # --- run ---------------------------------------------------------------------------------------------
-status=0
-for target in "${targets[@]}"; do
-  corpus="$build/corpus/$target"
-  artifacts="$build/artifacts/$target/"
+# Runs one target; its log goes to build-asan/TARGET.log, its verdict to build-asan/TARGET.status.
+run_target() {
+  local target="$1"
+  local corpus="$build/corpus/$target" artifacts="$build/artifacts/$target/" log="$build/$target.log"
   mkdir -p "$corpus" "$artifacts"
-  extra=()
+  local extra=()
   [ "$target" = fuzz_scene_json ] && extra=(-dict="$dict")
-  echo "fuzz.sh: $target for ${seconds} s"
-  log="$build/$target.log"
   if ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
      "$build/fuzz/$target" "$corpus" "$seeds/$target" "${extra[@]}" -max_total_time="$seconds" -timeout=10 \
        -rss_limit_mb=2048 -max_len=65536 -artifact_prefix="$artifacts" -print_final_stats=1 >"$log" 2>&1; then
-    grep -E '^stat::number_of_executed_units|^Done' "$log" | tr '\n' ' '; echo
+    echo ok >"$build/$target.status"
+  else
+    echo failed >"$build/$target.status"
+  fi
+}
+
+echo "fuzz.sh: ${targets[*]} for ${seconds} s$([ "${TWINRAY_FUZZ_SEQUENTIAL:-}" = 1 ] && echo ' each, one after the other' || echo ', concurrently')"
+if [ "${TWINRAY_FUZZ_SEQUENTIAL:-}" = 1 ]; then
+  for target in "${targets[@]}"; do run_target "$target"; done
+else
+  for target in "${targets[@]}"; do run_target "$target" & done
+  wait
+fi
+
+status=0
+for target in "${targets[@]}"; do
+  log="$build/$target.log"
+  if [ "$(cat "$build/$target.status")" = ok ]; then
+    echo "fuzz.sh: $target: $(grep -E '^stat::number_of_executed_units' "$log" | tr -d '\n') $(grep -E '^Done' "$log" | tr -d '\n')"
   else
     status=1
-    echo "fuzz.sh: $target FAILED (input in $artifacts):"
+    echo "fuzz.sh: $target FAILED (input in $build/artifacts/$target/):"
     tail -n 40 "$log"
   fi
 done

@@ -1,23 +1,19 @@
 #!/usr/bin/env bash
 # Builds the whole project and its test suite with AddressSanitizer + UndefinedBehaviorSanitizer and runs
 # every test with ctest. Any sanitizer report aborts the test that triggered it (-fno-sanitize-recover=all,
-# halt_on_error), so a clean run means no report at all.
+# halt_on_error, abort_on_error), so a clean run means no report at all.
 #
 #   scripts/sanitize.sh [ctest arguments...]
 #
-# Builds in build-asan/ (TWINRAY_ASAN_BUILD_DIR overrides) with RelWithDebInfo, so reports have line
-# numbers and the suite still runs in minutes. Embree and oneTBB come from Debian and are not instrumented:
-# ASan still checks every access our code makes, including into buffers we hand to Embree, but not
-# Embree's own accesses. scripts/lsan.supp lists the only suppressions, each with its reason.
+# The instrumented tree (clang 14, build-asan/) is made by scripts/configure-asan.sh and shared with
+# scripts/fuzz.sh. Embree and oneTBB come from Debian and are not instrumented: ASan still checks every
+# access our code makes, including into buffers we hand to Embree, but not Embree's own accesses.
+# scripts/lsan.supp lists the only suppressions, each with its reason.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${TWINRAY_ASAN_BUILD_DIR:-$root/build-asan}"
 
-bash "$root/scripts/install-deps.sh"
-
-cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTWINRAY_SANITIZE=address,undefined \
-  -DTWINRAY_BUILD_BENCH=OFF >/dev/null
-cmake --build "$build" -j "${TWINRAY_ASAN_JOBS:-2}"
+bash "$root/scripts/configure-asan.sh"
 
 if [ -z "${TWINRAY_SHARED:-}" ] && [ -d "$root/../shared" ]; then
   export TWINRAY_SHARED="$(cd "$root/../shared" && pwd)"
