@@ -43,11 +43,6 @@ constexpr int kReferenceSppRatio = 8;
 // With a reference given as a file (converged elsewhere), doubling stops only at the budget.
 constexpr int kMaxStudySpp = 1 << 16;
 
-int bad_input(const std::string& message) {
-  fmt::print(stderr, "twinray converge: error: {}\n", message);
-  return kExitBadInput;
-}
-
 Image rgb_of(const Image& img) {
   if (img.channels == 3) return img;
   Image out(img.width, img.height, 3);
@@ -63,17 +58,17 @@ int run_converge(const ConvergeCommandOptions& opt) {
     settings.strategies = converge::parse_strategies(opt.strategies);
     settings.backends = parse_backend_list(opt.backends);
   } catch (const std::invalid_argument& e) {
-    return bad_input(e.what());
+    return report_bad_input("converge", e.what());
   }
-  if (!(opt.budget_seconds > 0.0)) return bad_input("--budget must be positive");
-  if (!opt.reference.empty() && opt.reference_spp) return bad_input("--reference and --reference-spp are exclusive");
-  if (opt.reference_spp && *opt.reference_spp < 1) return bad_input("--reference-spp must be at least 1");
-  if (opt.threads < 0) return bad_input("--threads must be positive (0 = all cores)");
+  if (!(opt.budget_seconds > 0.0)) return report_bad_input("converge", "--budget must be positive");
+  if (!opt.reference.empty() && opt.reference_spp) return report_bad_input("converge", "--reference and --reference-spp are exclusive");
+  if (opt.reference_spp && *opt.reference_spp < 1) return report_bad_input("converge", "--reference-spp must be at least 1");
+  if (opt.threads < 0) return report_bad_input("converge", "--threads must be positive (0 = all cores)");
 
   const Scene scene = load_scene(opt.scene);
   for (const converge::StrategySpec& s : settings.strategies)
     if (s.needs_environment_map && scene.environment.type != EnvironmentType::Image)
-      return bad_input("strategy '" + s.name + "' compares environment sampling, but " + opt.scene +
+      return report_bad_input("converge", "strategy '" + s.name + "' compares environment sampling, but " + opt.scene +
                        " has no environment map");
   settings.budget_seconds = opt.budget_seconds;
   settings.max_depth = scene.render.max_depth;
@@ -90,7 +85,7 @@ int run_converge(const ConvergeCommandOptions& opt) {
   if (!opt.reference.empty()) {
     reference = rgb_of(read_image(opt.reference));
     if (reference.width != scene.camera.width || reference.height != scene.camera.height)
-      return bad_input(fmt::format("{}: reference is {}x{}, the scene renders {}x{}", opt.reference, reference.width,
+      return report_bad_input("converge", fmt::format("{}: reference is {}x{}, the scene renders {}x{}", opt.reference, reference.width,
                                    reference.height, scene.camera.width, scene.camera.height));
     study.reference = opt.reference;
     settings.max_spp = kMaxStudySpp;

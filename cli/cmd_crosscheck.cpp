@@ -76,18 +76,15 @@ int run_crosscheck(const CrosscheckOptions& opt) {
     names = parse_backend_list(opt.backends);
     kinds = crosscheck::parse_ray_kinds(opt.kinds);
   } catch (const std::invalid_argument& e) {
-    fmt::print(stderr, "twinray crosscheck: error: {}\n", e.what());
-    return kExitBadInput;
+    return report_bad_input("crosscheck", e.what());
   }
   if (names.size() < 2) {
-    fmt::print(stderr, "twinray crosscheck: error: --backends needs at least two backends to compare\n");
-    return kExitBadInput;
+    return report_bad_input("crosscheck", "--backends needs at least two backends to compare");
   }
   // Each ray costs 32 bytes plus a 40-byte hit and an any-hit flag per backend: 10M rays stay near 1 GB.
   constexpr std::int64_t kMaxRays = 10'000'000;
   if (opt.rays < 1 || opt.rays > kMaxRays) {
-    fmt::print(stderr, "twinray crosscheck: error: --rays must be between 1 and {}, got {}\n", kMaxRays, opt.rays);
-    return kExitBadInput;
+    return report_bad_input("crosscheck", fmt::format("--rays must be between 1 and {}, got {}", kMaxRays, opt.rays));
   }
 
   const ScopedFlushDenormals ftz;

@@ -41,8 +41,7 @@ int run_info(const InfoOptions& opt) {
     try {
       to_build = parse_backend_list(opt.build);
     } catch (const std::invalid_argument& e) {
-      fmt::print(stderr, "twinray info: error: {}\n", e.what());
-      return kExitBadInput;
+      return report_bad_input("info", e.what());
     }
   }
   const Scene scene = load_scene(opt.scene);

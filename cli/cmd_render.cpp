@@ -42,11 +42,6 @@ struct RenderCommandOptions {
   std::string json;
 };
 
-int bad_input(const std::string& message) {
-  fmt::print(stderr, "twinray render: error: {}\n", message);
-  return kExitBadInput;
-}
-
 // "out.exr" + "normals" -> "out.normals.exr"
 std::filesystem::path aux_path(const std::filesystem::path& base, const std::string& name) {
   std::filesystem::path p = base;
@@ -83,30 +78,30 @@ int run_render(const RenderCommandOptions& opt) {
   RenderOptions ro;
   if (opt.integrator == "path") ro.integrator = IntegratorKind::Path;
   else if (opt.integrator == "direct") ro.integrator = IntegratorKind::Direct;
-  else return bad_input("unknown --integrator '" + opt.integrator + "' (choose from direct, path)");
+  else return report_bad_input("render", "unknown --integrator '" + opt.integrator + "' (choose from direct, path)");
   if (opt.strategy == "mis") ro.settings.strategy = SamplingStrategy::Mis;
   else if (opt.strategy == "bsdf") ro.settings.strategy = SamplingStrategy::Bsdf;
   else if (opt.strategy == "light") ro.settings.strategy = SamplingStrategy::Light;
-  else return bad_input("unknown --strategy '" + opt.strategy + "' (choose from mis, bsdf, light)");
+  else return report_bad_input("render", "unknown --strategy '" + opt.strategy + "' (choose from mis, bsdf, light)");
   if (opt.env_sampling == "importance") ro.env_importance_sampling = true;
   else if (opt.env_sampling == "uniform") ro.env_importance_sampling = false;
-  else return bad_input("unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
-  if (opt.spp && opt.time_seconds) return bad_input("--spp and --time are exclusive");
-  if (opt.spp && *opt.spp < 1) return bad_input("--spp must be at least 1");
-  if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return bad_input("--time must be positive");
+  else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
+  if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
+  if (opt.spp && *opt.spp < 1) return report_bad_input("render", "--spp must be at least 1");
+  if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return report_bad_input("render", "--time must be positive");
   if (opt.max_depth && (*opt.max_depth == 0 || *opt.max_depth < -1))
-    return bad_input("--max-depth must be -1 (unlimited) or at least 1");
-  if (opt.rr_depth < 1) return bad_input("--rr-depth must be at least 1");
-  if (opt.threads < 0) return bad_input("--threads must be positive (0 = all cores)");
+    return report_bad_input("render", "--max-depth must be -1 (unlimited) or at least 1");
+  if (opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
+  if (opt.threads < 0) return report_bad_input("render", "--threads must be positive (0 = all cores)");
   std::string aux_error;
   const std::optional<AuxChannels> aux = parse_aux(opt.aux, aux_error);
-  if (!aux) return bad_input(aux_error);
+  if (!aux) return report_bad_input("render", aux_error);
 
   std::unique_ptr<Backend> backend;
   try {
     backend = make_backend(opt.backend);
   } catch (const std::invalid_argument& e) {
-    return bad_input(e.what());
+    return report_bad_input("render", e.what());
   }
 
   Scene scene = load_scene(opt.scene);
@@ -126,7 +121,7 @@ int run_render(const RenderCommandOptions& opt) {
   ro.settings.rr_depth = opt.rr_depth;
   ro.seed = opt.seed.value_or(scene.render.seed);
   ro.aux = *aux;
-  if (ro.spp < 1) return bad_input("the scene's render.spp must be at least 1");
+  if (ro.spp < 1) return report_bad_input("render", "the scene's render.spp must be at least 1");
 
   std::filesystem::path exr_out = opt.output;
   if (exr_out.empty() && opt.png.empty()) exr_out = std::filesystem::path(opt.scene).stem().string() + ".exr";

@@ -21,8 +21,7 @@ struct ReportCommandOptions {
 
 int run_report(const ReportCommandOptions& opt) {
   if (opt.bench.empty() && opt.converge.empty() && opt.heatmaps.empty()) {
-    fmt::print(stderr, "twinray report: error: nothing to report: give --bench, --converge or --heatmap\n");
-    return kExitBadInput;
+    return report_bad_input("report", "nothing to report: give --bench, --converge or --heatmap");
   }
   report::ReportInputs in;
   in.bench = opt.bench;

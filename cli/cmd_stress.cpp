@@ -39,12 +39,10 @@ int run_stress(const StressCommandOptions& opt) {
   try {
     backends = parse_backend_list(opt.backends);
   } catch (const std::invalid_argument& e) {
-    fmt::print(stderr, "twinray stress: error: {}\n", e.what());
-    return kExitBadInput;
+    return report_bad_input("stress", e.what());
   }
   if (!(opt.effort > 0.0 && opt.effort <= 100.0)) {
-    fmt::print(stderr, "twinray stress: error: --effort must be in (0, 100], got {}\n", opt.effort);
-    return kExitBadInput;
+    return report_bad_input("stress", fmt::format("--effort must be in (0, 100], got {}", opt.effort));
   }
   std::vector<const StressCase*> selected;
   for (const std::string& name : opt.cases) {
@@ -52,8 +50,7 @@ int run_stress(const StressCommandOptions& opt) {
     if (!c) {
       std::string known;
       for (const StressCase& k : all_cases()) known += (known.empty() ? "" : ", ") + k.name;
-      fmt::print(stderr, "twinray stress: error: unknown case '{}' (known: {})\n", name, known);
-      return kExitBadInput;
+      return report_bad_input("stress", fmt::format("unknown case '{}' (known: {})", name, known));
     }
     selected.push_back(c);
   }

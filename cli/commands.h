@@ -4,8 +4,10 @@
 //   0 success, 1 the check or comparison failed, 2 bad input (message on stderr, no output left behind).
 
 #include <CLI/CLI.hpp>
+#include <fmt/core.h>
 
 #include <functional>
+#include <string_view>
 
 namespace twinray::cli {
 
@@ -14,6 +16,13 @@ inline constexpr int kExitCheckFailed = 1;
 inline constexpr int kExitBadInput = 2;
 
 using CommandRunner = std::function<int()>;
+
+// Prints "twinray COMMAND: error: MESSAGE" on stderr and returns kExitBadInput: the one shape of every
+// bad-input message, which scripts and the CLI contract tests match.
+inline int report_bad_input(std::string_view command, std::string_view message) {
+  fmt::print(stderr, "twinray {}: error: {}\n", command, message);
+  return kExitBadInput;
+}
 
 void add_info_command(CLI::App& app, CommandRunner& run);
 void add_crosscheck_command(CLI::App& app, CommandRunner& run);
