@@ -67,6 +67,8 @@ std::vector<Row> rows() {
       {"json_truncated", {{"s.json", ok.substr(0, 60)}}, render("{dir}/s.json"), {"s.json:1:", "JSON syntax error"}},
       {"json_wrong_type", {{"s.json", scene(R"({"type": "sphere", "center": [0, 0, 0], "radius": "big", "material": "w"})")}},
        render("{dir}/s.json"), {"s.json: at /shapes/0/radius", "number"}},
+      {"json_duplicate_key", {{"s.json", scene(R"({"type": "sphere", "center": [0, 0, 0], "radius": 1, "radius": 2, "material": "w"})")}},
+       render("{dir}/s.json"), {"s.json: at /shapes/0/radius", "duplicate key 'radius'"}},
       {"json_number_overflow_inf", {{"s.json", scene(R"({"type": "sphere", "center": [0, 1e999, 0], "radius": 1, "material": "w"})")}},
        render("{dir}/s.json"), {"s.json:", "1e999"}},
       {"json_negative_radius", {{"s.json", scene(R"({"type": "sphere", "center": [0, 0, 0], "radius": -1, "material": "w"})")}},

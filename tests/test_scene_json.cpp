@@ -1,8 +1,10 @@
 // JSON scenes: every field reaches the Scene, relative paths resolve against the scene's folder, transforms
 // are applied exactly, bare meshes get a framing camera, and the bundled scenes load.
 
+#include "core/scene/json_reader.h"
 #include "core/scene/json_scene.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/input_error.h"
 #include "scene_test_files.h"
 
 #include <glm/geometric.hpp>
@@ -188,6 +190,25 @@ TEST(JsonScene, SphereTransformMovesCentreAndScalesRadius) {
   EXPECT_EQ(s.center.y, 1.0f);
   EXPECT_NEAR(s.center.z, 0.0f, 1e-15f);
   EXPECT_EQ(s.radius, 2.0f);
+}
+
+// A repeated key is an error at its own JSON pointer, however deep: array indices and escaped '/' and '~'
+// (RFC 6901) included. The same key in two different objects is not a repeat.
+TEST(JsonScene, RepeatedKeyIsAnErrorAtItsPointer) {
+  const auto where = [](const std::string& text) {
+    try {
+      parse_json_text(text, "d.json");
+    } catch (const InputError& e) {
+      EXPECT_NE(e.message().find("duplicate key"), std::string::npos) << e.what();
+      return e.where();
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(where(R"({"a": 1, "a": 2})"), "/a");
+  EXPECT_EQ(where(R"({"a": [1, {"b": 1}, {"c": 1, "d": [], "c": 2}]})"), "/a/2/c");
+  EXPECT_EQ(where(R"({"x/y": {"k~": {"z": 0}, "k~": 1}})"), "/x~1y/k~0");
+  EXPECT_EQ(where(R"([[{"": 0, "": 0}]])"), "/0/0/");
+  EXPECT_EQ(where(R"({"a": {"k": 1}, "b": {"k": 1}, "k": [{"k": 1}, {"k": 2}]})"), "no error");
 }
 
 TEST(BareMeshScene, FramesTheBoundingSphereFromAbove) {

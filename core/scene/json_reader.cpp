@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 #include <vector>
 
 namespace twinray {
@@ -73,6 +74,56 @@ struct ErrorLocator : nlohmann::json_sax<Json> {
   }
 };
 
+// JSON allows an object to repeat a key and nlohmann keeps the last value, so a scene with two "radius"
+// keys would silently render the second. A SAX pass over the text (after the DOM parse succeeded) finds
+// the first repeated key and its JSON pointer; the pass is linear, and hashing keeps objects with very
+// many keys (fuzzed input) linear too.
+struct DuplicateKeyFinder : nlohmann::json_sax<Json> {
+  struct Container {
+    bool is_array = false;
+    std::size_t next_index = 0;
+    std::unordered_set<std::string> keys;
+    std::string child_token;  // pointer token of the member or element being read
+  };
+  std::vector<Container> open;
+  bool found = false;
+  std::string duplicate_pointer;
+  std::string duplicate_key;
+
+  void value_starts() {
+    if (!open.empty() && open.back().is_array) open.back().child_token = std::to_string(open.back().next_index++);
+  }
+  bool null() override { return value_starts(), true; }
+  bool boolean(bool) override { return value_starts(), true; }
+  bool number_integer(number_integer_t) override { return value_starts(), true; }
+  bool number_unsigned(number_unsigned_t) override { return value_starts(), true; }
+  bool number_float(number_float_t, const string_t&) override { return value_starts(), true; }
+  bool string(string_t&) override { return value_starts(), true; }
+  bool binary(binary_t&) override { return value_starts(), true; }
+  bool start_object(std::size_t) override {
+    value_starts();
+    open.emplace_back();
+    return true;
+  }
+  bool key(string_t& k) override {
+    Container& object = open.back();
+    object.child_token = escape_pointer_token(k);
+    if (object.keys.insert(k).second) return true;
+    for (const Container& c : open) duplicate_pointer += "/" + c.child_token;
+    duplicate_key = k;
+    found = true;
+    return false;  // stop at the first duplicate
+  }
+  bool end_object() override { return open.pop_back(), true; }
+  bool start_array(std::size_t) override {
+    value_starts();
+    open.emplace_back().is_array = true;
+    return true;
+  }
+  bool end_array() override { return open.pop_back(), true; }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::json::exception&) override { return false; }
+};
+
 // nlohmann positions count bytes from 1 and point at the last character read.
 std::string line_and_column(std::string_view text, std::size_t byte) {
   const std::size_t offset = std::min(byte > 0 ? byte - 1 : 0, text.size());
@@ -98,7 +149,13 @@ std::string strip_nlohmann_prefix(const std::string& what) {
 
 Json parse_json_text(std::string_view text, const std::filesystem::path& file) {
   try {
-    return Json::parse(text.begin(), text.end());
+    Json document = Json::parse(text.begin(), text.end());
+    DuplicateKeyFinder duplicates;
+    Json::sax_parse(text.begin(), text.end(), &duplicates);
+    if (duplicates.found)
+      throw InputError(file, duplicates.duplicate_pointer,
+                       "duplicate key '" + duplicates.duplicate_key + "' (JSON parsers keep only one of the values)");
+    return document;
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(file, line_and_column(text, e.byte), "JSON " + strip_nlohmann_prefix(e.what()));
   } catch (const nlohmann::json::exception& e) {

@@ -17,7 +17,8 @@ namespace twinray {
 // Ordered so that materials keep the order they are written in.
 using Json = nlohmann::ordered_json;
 
-// Parses `text`; a syntax error (or a number too large for a double) throws InputError at "line L:C".
+// Parses `text`; a syntax error (or a number too large for a double) throws InputError at "line L:C", and
+// a key repeated within one object throws InputError at the repeated key's JSON pointer.
 Json parse_json_text(std::string_view text, const std::filesystem::path& file);
 
 class JsonNode {
