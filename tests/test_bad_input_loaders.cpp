@@ -5,6 +5,7 @@
 #include "core/scene/scene_loader.h"
 #include "core/util/input_error.h"
 #include "scene_test_files.h"
+#include "ray_test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -18,6 +19,8 @@
 
 namespace twinray {
 namespace {
+
+using test::kNaN;
 
 struct BadInputCase {
   std::string name;
@@ -57,8 +60,6 @@ std::string le_face(std::initializer_list<std::int32_t> corners) {
   for (std::int32_t v : corners) out.append(reinterpret_cast<const char*>(&v), sizeof v);
   return out;
 }
-
-const float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 std::vector<BadInputCase> bad_inputs() {
   return {

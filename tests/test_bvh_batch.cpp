@@ -6,6 +6,7 @@
 #include "backends/bvh/ray_order.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
+#include "ray_test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -18,9 +19,9 @@
 namespace twinray {
 namespace {
 
-bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
+using test::same_bits;
 
-std::vector<Ray> random_rays(std::size_t n, std::uint64_t seed) {
+std::vector<Ray> rays_with_invalid_slots(std::size_t n, std::uint64_t seed) {
   Rng rng(seed, 0);
   const auto uniform = [&] { return 3.0f * rng.next_float() - 1.5f; };
   std::vector<Ray> rays(n);
@@ -39,7 +40,7 @@ TEST(BvhBatch, BatchAnswersEqualSingleRayAnswersSlotForSlot) {
   const SceneGeometry geometry = mixed_spheres_and_triangles(50, 2000, 3);
   BvhBackend bvh;
   bvh.build(geometry);
-  const std::vector<Ray> rays = random_rays(20000, 11);
+  const std::vector<Ray> rays = rays_with_invalid_slots(20000, 11);
 
   std::vector<Hit> batch(rays.size());
   std::vector<std::uint8_t> batch_occluded(rays.size());
@@ -70,7 +71,7 @@ TEST(BvhBatch, BatchAnswersEqualSingleRayAnswersSlotForSlot) {
 
 TEST(BvhBatch, MortonOrderIsADeterministicPermutationAlongTheCurve) {
   const Bounds3 bounds{glm::vec3(-1.5f), glm::vec3(1.5f)};
-  std::vector<Ray> rays = random_rays(5000, 4);
+  std::vector<Ray> rays = rays_with_invalid_slots(5000, 4);
   // Duplicated origins: ties keep the input order.
   for (std::size_t i = 0; i + 1 < rays.size(); i += 50) rays[i + 1].org = rays[i].org;
   const std::vector<std::uint32_t> order = morton_ray_order(rays, bounds);

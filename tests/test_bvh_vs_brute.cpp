@@ -6,6 +6,7 @@
 #include "backends/bvh/bvh_backend.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
+#include "ray_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -20,7 +21,9 @@
 namespace twinray {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using test::kInf;
+using test::same_bits;
+
 constexpr int kRaysPerScene = 20000;
 
 glm::vec3 random_direction(Rng& rng) {
@@ -75,8 +78,6 @@ std::string describe(const Ray& r) {
          ") dir (" + std::to_string(r.dir.x) + ", " + std::to_string(r.dir.y) + ", " + std::to_string(r.dir.z) +
          ") [" + std::to_string(r.tmin) + ", " + std::to_string(r.tmax) + "]";
 }
-
-bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
 
 // Compares every ray; returns the number of closest hits (so a scene that is never hit cannot pass).
 std::size_t expect_identical(const SceneGeometry& geometry, const std::vector<Ray>& rays) {

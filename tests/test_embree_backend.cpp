@@ -4,6 +4,7 @@
 #include "core/intersect/sphere_robust.h"
 #include "core/sampling/rng.h"
 #include "core/util/fp_mode.h"
+#include "ray_test_util.h"
 
 #include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
@@ -18,8 +19,9 @@
 namespace twinray {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using test::kInf;
+using test::kNaN;
+using test::make_ray;
 
 // A mesh as the loaders make it: with the spare vertex capacity Embree's 16-byte loads need.
 TriangleMesh make_mesh(std::uint32_t geom_id, const std::vector<glm::vec3>& positions,
@@ -54,15 +56,6 @@ Sphere make_sphere(std::uint32_t geom_id, glm::vec3 center, float radius) {
   s.center = center;
   s.radius = radius;
   return s;
-}
-
-Ray make_ray(glm::vec3 org, glm::vec3 dir, float tmin = 0.0f, float tmax = kInf) {
-  Ray r;
-  r.org = org;
-  r.dir = dir;
-  r.tmin = tmin;
-  r.tmax = tmax;
-  return r;
 }
 
 class EmbreeBackendTest : public ::testing::TestWithParam<bool> {

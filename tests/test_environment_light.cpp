@@ -29,18 +29,17 @@ namespace {
 
 using twinray::testing::chi_square_accepts;
 namespace fs = std::filesystem;
-constexpr double kPiD = std::numbers::pi;
 
 
 // The documented convention, written out independently of the implementation: map column coordinate
 // u = 0.5 + phi / 2pi with phi = atan2(x, -z); v = theta / pi with theta measured from +Y.
 glm::dvec3 direction_from_map(double u, double cos_theta) {
-  const double phi = 2.0 * kPiD * (u - 0.5);
+  const double phi = 2.0 * std::numbers::pi * (u - 0.5);
   const double s = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
   return glm::dvec3(s * std::sin(phi), cos_theta, -s * std::cos(phi));
 }
 double texel_solid_angle(int y, int w, int h) {
-  return 2.0 * kPiD / w * (std::cos(kPiD * y / h) - std::cos(kPiD * (y + 1) / h));
+  return 2.0 * std::numbers::pi / w * (std::cos(std::numbers::pi * y / h) - std::cos(std::numbers::pi * (y + 1) / h));
 }
 float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
@@ -105,7 +104,7 @@ TEST_F(EnvironmentLightTest, EvalFollowsTheDocumentedConvention) {
   // Every texel centre, built from the documented formulas.
   for (int y = 0; y < 5; ++y)
     for (int x = 0; x < 9; ++x) {
-      const double cos_theta = std::cos(kPiD * (y + 0.5) / 5);
+      const double cos_theta = std::cos(std::numbers::pi * (y + 0.5) / 5);
       const glm::vec3 d(direction_from_map((x + 0.5) / 9, cos_theta));
       EXPECT_EQ(light->eval(d), labelled(x, y)) << "texel " << x << ", " << y;
       EXPECT_EQ(light->texel_of(d), glm::ivec2(x, y));
@@ -138,12 +137,12 @@ TEST_F(EnvironmentLightTest, ScaleMultipliesRadiance) {
 double integrate_pdf(const EnvironmentLight& light, int w, int h, int k) {
   double sum = 0.0;
   for (int y = 0; y < h; ++y) {
-    const double c0 = std::cos(kPiD * y / h), c1 = std::cos(kPiD * (y + 1) / h);
+    const double c0 = std::cos(std::numbers::pi * y / h), c1 = std::cos(std::numbers::pi * (y + 1) / h);
     for (int j = 0; j < k; ++j) {
       const double z = c0 + (j + 0.5) / k * (c1 - c0);
       for (int i = 0; i < w * k; ++i) {
         const glm::vec3 d(direction_from_map((i + 0.5) / (w * k), z));
-        sum += light.pdf(d) * (2.0 * kPiD / (w * k)) * (c0 - c1) / k;
+        sum += light.pdf(d) * (2.0 * std::numbers::pi / (w * k)) * (c0 - c1) / k;
       }
     }
   }
@@ -163,7 +162,7 @@ TEST_F(EnvironmentLightTest, PdfIntegratesToOneOverTheSphere) {
   EXPECT_NEAR(integrate_pdf(*importance, 9, 5, 4), 1.0, 1e-5);
   EXPECT_NEAR(integrate_pdf(*uniform, 9, 5, 4), 1.0, 1e-5);
   // Black texel: pdf 0 there.
-  EXPECT_EQ(importance->pdf(glm::vec3(direction_from_map(3.5 / 9, std::cos(kPiD * 1.5 / 5)))), 0.0f);
+  EXPECT_EQ(importance->pdf(glm::vec3(direction_from_map(3.5 / 9, std::cos(std::numbers::pi * 1.5 / 5)))), 0.0f);
 }
 
 TEST_F(EnvironmentLightTest, SamplesAgreeWithPdfAndEvalAndFollowTheDistribution) {
@@ -209,7 +208,7 @@ TEST_F(EnvironmentLightTest, DirectionsInsideATexelAreUniformInSolidAngle) {
   Image map(8, 4, 3);
   map.at(5, 0, 0) = map.at(5, 0, 1) = map.at(5, 0, 2) = 1.0f;
   const auto light = EnvironmentLight::create(image_environment(map));
-  const double c0 = 1.0, c1 = std::cos(kPiD / 4);
+  const double c0 = 1.0, c1 = std::cos(std::numbers::pi / 4);
   const int n = 50000, bins = 20;
   std::vector<double> observed(bins, 0.0), expected(bins, n / static_cast<double>(bins));
   Rng rng(8, 8);
@@ -230,7 +229,7 @@ TEST_F(EnvironmentLightTest, OneBrightTexelIsSampledWithItsShareOfThePower) {
   for (int c = 0; c < 3; ++c) map.at(bx, by, c) = 2000.0f;
   const auto light = EnvironmentLight::create(image_environment(map));
   const double bright = 2000.0 * texel_solid_angle(by, 64, 32);
-  const double p = bright / (4.0 * kPiD - texel_solid_angle(by, 64, 32) + bright);  // ~0.44
+  const double p = bright / (4.0 * std::numbers::pi - texel_solid_angle(by, 64, 32) + bright);  // ~0.44
   const int n = 100000;
   int hits = 0;
   Rng rng(21, 1);
@@ -242,8 +241,8 @@ TEST_F(EnvironmentLightTest, OneBrightTexelIsSampledWithItsShareOfThePower) {
   EXPECT_NEAR(hits, n * p, 5.0 * sigma);
   // Importance sampling against uniform: the pdf ratio at the bright texel is its luminance ratio to the mean.
   const auto uniform = EnvironmentLight::create(image_environment(map, "u.exr"), false);
-  const glm::vec3 d(direction_from_map((bx + 0.5) / 64, std::cos(kPiD * (by + 0.5) / 32)));
-  EXPECT_NEAR(light->pdf(d) / uniform->pdf(d), 2000.0 * 4.0 * kPiD / (4.0 * kPiD - texel_solid_angle(by, 64, 32) + bright),
+  const glm::vec3 d(direction_from_map((bx + 0.5) / 64, std::cos(std::numbers::pi * (by + 0.5) / 32)));
+  EXPECT_NEAR(light->pdf(d) / uniform->pdf(d), 2000.0 * 4.0 * std::numbers::pi / (4.0 * std::numbers::pi - texel_solid_angle(by, 64, 32) + bright),
               1e-4 * light->pdf(d) / uniform->pdf(d));
 }
 
@@ -261,7 +260,7 @@ TEST_F(EnvironmentLightTest, ConstantEnvironmentHasNoTables) {
   EXPECT_EQ(light->eval(glm::vec3(0.6f, 0.8f, 0.0f)), env.radiance);
   EXPECT_EQ(light->average_radiance(), env.radiance);
   const EnvironmentLight::Sample s = light->sample(glm::vec2(0.3f, 0.9f));
-  EXPECT_FLOAT_EQ(s.pdf, static_cast<float>(1.0 / (4.0 * kPiD)));
+  EXPECT_FLOAT_EQ(s.pdf, static_cast<float>(1.0 / (4.0 * std::numbers::pi)));
   EXPECT_EQ(s.radiance, env.radiance);
 }
 
@@ -273,15 +272,15 @@ TEST_F(EnvironmentLightTest, IrradianceOfAConstantEnvironmentIsPiL) {
   // n = +-Y: the horizon is a row edge and the cosine is linear in the quadrature variable: exact.
   for (glm::vec3 n : {glm::vec3(0, 1, 0), glm::vec3(0, -1, 0)}) {
     const glm::dvec3 e = environment_irradiance(*light, n);
-    EXPECT_NEAR(e.x, kPiD * 1.0, 1e-12);
-    EXPECT_NEAR(e.y, kPiD * 2.0, 1e-12);
-    EXPECT_NEAR(e.z, kPiD * 0.25, 1e-12);
+    EXPECT_NEAR(e.x, std::numbers::pi * 1.0, 1e-12);
+    EXPECT_NEAR(e.y, std::numbers::pi * 2.0, 1e-12);
+    EXPECT_NEAR(e.z, std::numbers::pi * 0.25, 1e-12);
   }
   // Tilted normals: the horizon cuts cells; the midpoint rule then errs by O(cell size^2) along it.
   // Measured error at subdivisions 4 on the 64 x 32 grid is below 1e-4 relative; 5e-4 is the bound.
   for (glm::vec3 n : {glm::vec3(1, 0, 0), glm::normalize(glm::vec3(0.3f, 0.5f, -0.8f))}) {
     const glm::dvec3 e = environment_irradiance(*light, n);
-    EXPECT_NEAR(e.y / (kPiD * 2.0), 1.0, 5e-4);
+    EXPECT_NEAR(e.y / (std::numbers::pi * 2.0), 1.0, 5e-4);
   }
 }
 
@@ -293,9 +292,9 @@ TEST_F(EnvironmentLightTest, IrradianceOfAnImageMap) {
     for (int x = 0; x < 16; ++x)
       for (int c = 0; c < 3; ++c) map.at(x, y, c) = 1.0f;
   const auto light = EnvironmentLight::create(image_environment(map));
-  EXPECT_NEAR(environment_irradiance(*light, glm::vec3(0, 1, 0)).x, kPiD, 1e-12);
+  EXPECT_NEAR(environment_irradiance(*light, glm::vec3(0, 1, 0)).x, std::numbers::pi, 1e-12);
   EXPECT_NEAR(environment_irradiance(*light, glm::vec3(0, -1, 0)).x, 0.0, 1e-12);
-  EXPECT_NEAR(environment_irradiance(*light, glm::vec3(1, 0, 0), 8).x, kPiD / 2.0, 2e-3);
+  EXPECT_NEAR(environment_irradiance(*light, glm::vec3(1, 0, 0), 8).x, std::numbers::pi / 2.0, 2e-3);
   EXPECT_NEAR(light->average_radiance().x, 0.5f, 1e-6f);
 }
 
@@ -383,7 +382,7 @@ TEST(EnvironmentLightShared, StudioMapSamplesItsSmallBrightLamps) {
   std::vector<char> is_lamp(static_cast<std::size_t>(w * h), 0);
   double lamp_solid_angle = 0.0, lamp_power = 0.0;
   for (const auto& [lum, index] : by_luminance) {
-    if (lamp_solid_angle >= 0.005 * 4.0 * kPiD) break;
+    if (lamp_solid_angle >= 0.005 * 4.0 * std::numbers::pi) break;
     const double sa = texel_solid_angle(index / w, w, h);
     lamp_solid_angle += sa;
     lamp_power += lum * sa;
@@ -401,7 +400,7 @@ TEST(EnvironmentLightShared, StudioMapSamplesItsSmallBrightLamps) {
     hits += is_lamp[static_cast<std::size_t>(t.y * w + t.x)];
   }
   EXPECT_NEAR(hits, n * p, 5.0 * std::sqrt(n * p * (1.0 - p)) + 1e-4 * n)  // 5 sigma + edge rounding slack
-      << "lamps cover " << lamp_solid_angle / (4.0 * kPiD) << " of the sphere and hold " << p << " of the power";
+      << "lamps cover " << lamp_solid_angle / (4.0 * std::numbers::pi) << " of the sphere and hold " << p << " of the power";
   EXPECT_GT(light->memory_bytes(), static_cast<std::size_t>(w * h) * 12u);
 }
 

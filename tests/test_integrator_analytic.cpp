@@ -100,7 +100,7 @@ TEST(IntegratorAnalytic, ClosedEmissiveEnclosureFollowsTheGeometricSeries) {
       o.integrator = kind;
       const Rendered r = render_scene(scene, o);
       const double expected = k < 0 ? Le / (1.0 - a) : Le * (1.0 - std::pow(a, k)) / (1.0 - a);
-      SCOPED_TRACE(testing::Message() << "integrator " << to_string(kind) << ", max depth " << k);
+      SCOPED_TRACE(::testing::Message() << "integrator " << to_string(kind) << ", max depth " << k);
       expect_region(r, 0, expected, all_pixels, "enclosure");
     }
   }

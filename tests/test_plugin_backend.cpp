@@ -5,6 +5,7 @@
 #include "backends/registry.h"
 #include "core/sampling/rng.h"
 #include "core/util/input_error.h"
+#include "ray_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -19,21 +20,13 @@
 namespace twinray {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+using test::kInf;
+using test::kNaN;
+using test::make_ray;
 
 const std::filesystem::path kBrutePlugin = TWINRAY_TEST_BRUTE_PLUGIN;
 const std::filesystem::path kWrongAbiPlugin = TWINRAY_TEST_WRONG_ABI_PLUGIN;
 const std::filesystem::path kNoEntryPlugin = TWINRAY_TEST_NO_ENTRY_PLUGIN;
-
-Ray make_ray(glm::vec3 org, glm::vec3 dir, float tmin = 0.0f, float tmax = kInf) {
-  Ray r;
-  r.org = org;
-  r.dir = dir;
-  r.tmin = tmin;
-  r.tmax = tmax;
-  return r;
-}
 
 // A grid of 2 n^2 triangles in z = 0 over [0, n]^2, random triangles above it, spheres of varied sizes;
 // geometry ids interleave meshes and spheres.
@@ -76,7 +69,7 @@ SceneGeometry make_mixed_scene() {
   return g;
 }
 
-std::vector<Ray> random_rays(std::size_t n, std::uint64_t seed) {
+std::vector<Ray> rays_over_the_grid(std::size_t n, std::uint64_t seed) {
   Rng rng(seed, 1);
   std::vector<Ray> rays;
   for (std::size_t k = 0; k < n; ++k) {
@@ -105,7 +98,7 @@ TEST(PluginBackend, ExamplePluginCrosschecksAgainstBrute) {
   auto brute = make_brute_backend();
   plugin->build(g);
   brute->build(g);
-  const std::vector<Ray> rays = random_rays(3000, 17);
+  const std::vector<Ray> rays = rays_over_the_grid(3000, 17);
   std::size_t found = 0, on_spheres = 0;
   for (std::size_t k = 0; k < rays.size(); ++k) {
     Hit a, b;
@@ -134,7 +127,7 @@ TEST(PluginBackend, BatchesMatchSingleRaysAndInvalidRaysNeverReachThePlugin) {
   const SceneGeometry g = make_mixed_scene();
   auto plugin = load_plugin_backend(kBrutePlugin);
   plugin->build(g);
-  std::vector<Ray> rays = random_rays(600, 23);
+  std::vector<Ray> rays = rays_over_the_grid(600, 23);
   const glm::vec3 org{3, 3, 5}, down{0, 0, -1};
   const std::vector<Ray> invalid = {make_ray({kNaN, 0, 0}, down), make_ray(org, {0, 0, 0}), make_ray(org, {kInf, 0, 1}),
                                     make_ray(org, down, -1.0f), make_ray(org, down, 2.0f, 1.0f),

@@ -3,6 +3,7 @@
 
 #include "core/intersect/sphere_robust.h"
 #include "core/sampling/rng.h"
+#include "ray_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -14,7 +15,7 @@
 namespace twinray {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using test::kInf;
 
 // Smallest root >= tmin of the same quadratic, textbook formula with the stable q, in long double (64-bit
 // mantissa): a reference computed differently from the code under test. NaN when there is none.

@@ -21,7 +21,6 @@ namespace {
 
 using twinray::testing::chi_square_accepts;
 
-constexpr double kPiD = std::numbers::pi;
 
 
 // Histogram of sample directions on a (cos theta, phi) grid about +Z; cells are equal in solid angle
@@ -37,7 +36,7 @@ void check_direction_histogram(const std::function<glm::vec3(glm::vec2)>& warp,
     const glm::vec3 d = warp(glm::vec2(rng.next_float(), rng.next_float()));
     ASSERT_NEAR(glm::length(d), 1.0f, 1e-5f);
     const double zt = (d.z - z_min) / (1.0 - z_min);
-    const double pt = (std::atan2(d.y, d.x) + kPiD) / (2.0 * kPiD);
+    const double pt = (std::atan2(d.y, d.x) + std::numbers::pi) / (2.0 * std::numbers::pi);
     const int zi = std::clamp(static_cast<int>(zt * z_bins), 0, z_bins - 1);
     const int pi = std::clamp(static_cast<int>(pt * phi_bins), 0, phi_bins - 1);
     observed[static_cast<std::size_t>(zi * phi_bins + pi)] += 1.0;
@@ -54,7 +53,7 @@ void check_direction_histogram(const std::function<glm::vec3(glm::vec2)>& warp,
 double integrate_over_band(const std::function<double(double)>& pdf_of_z, double z_min, int steps) {
   double sum = 0.0;
   const double dz = (1.0 - z_min) / steps;
-  for (int i = 0; i < steps; ++i) sum += pdf_of_z(z_min + (i + 0.5) * dz) * 2.0 * kPiD * dz;
+  for (int i = 0; i < steps; ++i) sum += pdf_of_z(z_min + (i + 0.5) * dz) * 2.0 * std::numbers::pi * dz;
   return sum;
 }
 
@@ -105,7 +104,7 @@ TEST(Warp, TinyConeKeepsItsSizeWhereCosineRoundsToOne) {
   const float omc = one_minus_cos_from_sin2(sin2);
   const double exact_omc = 1.0 - std::cos(std::asin(radius));  // ~ radius^2 / 2; double is ample here
   EXPECT_NEAR(omc / exact_omc, 1.0, 1e-6);
-  EXPECT_NEAR(uniform_cone_pdf_one_minus_cos(omc) * (2.0 * kPiD * exact_omc), 1.0, 1e-6);
+  EXPECT_NEAR(uniform_cone_pdf_one_minus_cos(omc) * (2.0 * std::numbers::pi * exact_omc), 1.0, 1e-6);
 
   Rng rng(3, 4);
   double max_sin = 0.0, mean_sin2 = 0.0;

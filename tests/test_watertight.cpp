@@ -7,6 +7,7 @@
 #include "core/intersect/triangle_watertight.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
+#include "ray_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -19,7 +20,7 @@
 namespace twinray {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using test::kInf;
 
 // Rays from random points well inside the sphere (within a quarter radius of the center) in random
 // directions; one in four aims exactly at a mesh vertex and one in four has zero components (+0 / -0).
