@@ -1,6 +1,7 @@
 // OBJ reader: the statements real exporters write, parsed exactly.
 
 #include "core/scene/obj_reader.h"
+#include "core/util/input_error.h"
 
 #include <gtest/gtest.h>
 
@@ -53,6 +54,30 @@ TEST(ObjReader, AllCornerFormsGiveTheSamePositions) {
     const TriangleMesh mesh = parse(vertices + face + "\n", report);
     ASSERT_EQ(mesh.indices.size(), 1u) << face;
     EXPECT_EQ(mesh.indices[0], glm::uvec3(0, 1, 2)) << face;
+  }
+}
+
+TEST(ObjReader, JoinsStatementsContinuedWithABackslash) {
+  LoadReport report;
+  // A face and a vertex wrapped over lines (CRLF and blanks after the backslash too); a comment ending in
+  // a backslash (a Windows path) does not swallow the face after it.
+  const TriangleMesh mesh = parse("v 0 0 0\nv 1 0 \\\n 0\nv 1 1 0\r\nv 0 1 0\n# C:\\models\\\n"
+                                  "f 1 2 \\ \r\n  3 \\\n 4\nf 1 \\\n\\\n 2 3\n", report);
+  ASSERT_EQ(mesh.positions.size(), 4u);
+  EXPECT_EQ(mesh.positions[1], glm::vec3(1.0f, 0.0f, 0.0f));
+  ASSERT_EQ(mesh.indices.size(), 3u);
+  EXPECT_EQ(mesh.indices[0], glm::uvec3(0, 1, 2));
+  EXPECT_EQ(mesh.indices[1], glm::uvec3(0, 2, 3));
+  EXPECT_EQ(mesh.indices[2], glm::uvec3(0, 1, 2));
+}
+
+TEST(ObjReader, ErrorInAContinuedStatementNamesItsFirstLine) {
+  LoadReport report;
+  try {
+    parse("v 0 0 0\nf 1 \\\n 2 \\\n 9\n", report);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "line 2") << e.what();
   }
 }
 

@@ -29,7 +29,8 @@ class ObjParser {
   TriangleMesh parse() {
     std::string_view line;
     while (lines_.next(line)) {
-      std::string_view rest = line;
+      statement_line_ = lines_.line_number();
+      std::string_view rest = join_continued_lines(line);
       const std::string_view keyword = text::next_token(rest);
       if (keyword == "v") {
         parse_vertex(rest);
@@ -43,9 +44,34 @@ class ObjParser {
   }
 
  private:
-  [[noreturn]] void fail(const std::string& message) const { fail_at(lines_.line_number(), message); }
+  [[noreturn]] void fail(const std::string& message) const { fail_at(statement_line_, message); }
   [[noreturn]] void fail_at(std::size_t line, const std::string& message) const {
     throw InputError(path_, "line " + std::to_string(line), message);
+  }
+
+  // A statement whose last non-blank character is a backslash continues on the next line (OBJ spec,
+  // "\ line continuation": exporters wrap long faces this way). Comment lines never continue: Windows
+  // paths in comments end in a backslash. Errors name the statement's first line.
+  std::string_view join_continued_lines(std::string_view line) {
+    std::string_view first_token = line;
+    if (!ends_in_backslash(line) || text::next_token(first_token).starts_with('#')) return line;
+    joined_.clear();
+    do {
+      line.remove_suffix(line.size() - line.find_last_of('\\'));
+      joined_.append(line).push_back(' ');
+    } while (ends_in_backslash(line = next_physical_line()));
+    joined_.append(line);
+    return joined_;
+  }
+  static bool ends_in_backslash(std::string_view line) {
+    std::size_t end = line.size();
+    while (end > 0 && text::is_blank(line[end - 1])) --end;
+    return end > 0 && line[end - 1] == '\\';
+  }
+  // A backslash on the file's last line continues into nothing.
+  std::string_view next_physical_line() {
+    std::string_view line;
+    return lines_.next(line) ? line : std::string_view();
   }
 
   void parse_vertex(std::string_view rest) {
@@ -87,7 +113,7 @@ class ObjParser {
     // The OBJ spec wants vertices defined before use, but readers commonly accept forward references:
     // check those against the final vertex count at the end of the file.
     if (index > defined && (forward_.empty() || index > forward_.back().index))
-      forward_.push_back({index, lines_.line_number()});
+      forward_.push_back({index, statement_line_});
     return static_cast<std::uint32_t>(index - 1);
   }
 
@@ -125,6 +151,8 @@ class ObjParser {
   const std::filesystem::path& path_;
   LoadReport& report_;
   TriangleMesh mesh_;
+  std::size_t statement_line_ = 0;       // first line of the statement being parsed
+  std::string joined_;                   // a statement continued over several lines, joined
   std::vector<std::uint32_t> corners_;   // reused across faces
   std::vector<ForwardReference> forward_;  // strictly increasing indices beyond the vertices read so far
 };
