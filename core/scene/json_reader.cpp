@@ -74,54 +74,61 @@ struct ErrorLocator : nlohmann::json_sax<Json> {
   }
 };
 
-// JSON allows an object to repeat a key and nlohmann keeps the last value, so a scene with two "radius"
-// keys would silently render the second. A SAX pass over the text (after the DOM parse succeeded) finds
-// the first repeated key and its JSON pointer; the pass is linear, and hashing keeps objects with very
-// many keys (fuzzed input) linear too.
-struct DuplicateKeyFinder : nlohmann::json_sax<Json> {
+// JSON allows an object to repeat a key and nlohmann keeps one of the values, so a scene with two
+// "radius" keys would silently render one of them. The parser's callback sees every key as it is read:
+// this check tracks the open containers (for the JSON pointer of the repeat) and throws at the first
+// repeated key, in the same single pass that builds the document. Hashing keeps objects with very many
+// keys (fuzzed input) linear.
+class DuplicateKeyCheck {
+ public:
+  explicit DuplicateKeyCheck(const std::filesystem::path& file) : file_(file) {}
+
+  bool operator()(int /*depth*/, Json::parse_event_t event, Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start:
+        value_starts();
+        open_.emplace_back();
+        break;
+      case Json::parse_event_t::array_start:
+        value_starts();
+        open_.emplace_back().is_array = true;
+        break;
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        open_.pop_back();
+        break;
+      case Json::parse_event_t::value:
+        value_starts();
+        break;
+      case Json::parse_event_t::key: {
+        const std::string& key = parsed.get_ref<const std::string&>();
+        Container& object = open_.back();
+        object.child_token = escape_pointer_token(key);
+        if (!object.keys.insert(key).second) {
+          std::string pointer;
+          for (const Container& c : open_) pointer += "/" + c.child_token;
+          throw InputError(file_, pointer, "duplicate key '" + key + "' (JSON parsers keep only one of the values)");
+        }
+        break;
+      }
+    }
+    return true;  // keep every value
+  }
+
+ private:
   struct Container {
     bool is_array = false;
     std::size_t next_index = 0;
     std::unordered_set<std::string> keys;
     std::string child_token;  // pointer token of the member or element being read
   };
-  std::vector<Container> open;
-  bool found = false;
-  std::string duplicate_pointer;
-  std::string duplicate_key;
 
   void value_starts() {
-    if (!open.empty() && open.back().is_array) open.back().child_token = std::to_string(open.back().next_index++);
+    if (!open_.empty() && open_.back().is_array) open_.back().child_token = std::to_string(open_.back().next_index++);
   }
-  bool null() override { return value_starts(), true; }
-  bool boolean(bool) override { return value_starts(), true; }
-  bool number_integer(number_integer_t) override { return value_starts(), true; }
-  bool number_unsigned(number_unsigned_t) override { return value_starts(), true; }
-  bool number_float(number_float_t, const string_t&) override { return value_starts(), true; }
-  bool string(string_t&) override { return value_starts(), true; }
-  bool binary(binary_t&) override { return value_starts(), true; }
-  bool start_object(std::size_t) override {
-    value_starts();
-    open.emplace_back();
-    return true;
-  }
-  bool key(string_t& k) override {
-    Container& object = open.back();
-    object.child_token = escape_pointer_token(k);
-    if (object.keys.insert(k).second) return true;
-    for (const Container& c : open) duplicate_pointer += "/" + c.child_token;
-    duplicate_key = k;
-    found = true;
-    return false;  // stop at the first duplicate
-  }
-  bool end_object() override { return open.pop_back(), true; }
-  bool start_array(std::size_t) override {
-    value_starts();
-    open.emplace_back().is_array = true;
-    return true;
-  }
-  bool end_array() override { return open.pop_back(), true; }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::json::exception&) override { return false; }
+
+  const std::filesystem::path& file_;
+  std::vector<Container> open_;
 };
 
 // nlohmann positions count bytes from 1 and point at the last character read.
@@ -149,13 +156,12 @@ std::string strip_nlohmann_prefix(const std::string& what) {
 
 Json parse_json_text(std::string_view text, const std::filesystem::path& file) {
   try {
-    Json document = Json::parse(text.begin(), text.end());
-    DuplicateKeyFinder duplicates;
-    Json::sax_parse(text.begin(), text.end(), &duplicates);
-    if (duplicates.found)
-      throw InputError(file, duplicates.duplicate_pointer,
-                       "duplicate key '" + duplicates.duplicate_key + "' (JSON parsers keep only one of the values)");
-    return document;
+    // nlohmann copies the callback (a std::function): the check's state lives here, the callback refers to it.
+    DuplicateKeyCheck duplicates(file);
+    return Json::parse(text.begin(), text.end(),
+                       [&duplicates](int depth, Json::parse_event_t event, Json& parsed) {
+                         return duplicates(depth, event, parsed);
+                       });
   } catch (const nlohmann::json::parse_error& e) {
     throw InputError(file, line_and_column(text, e.byte), "JSON " + strip_nlohmann_prefix(e.what()));
   } catch (const nlohmann::json::exception& e) {
