@@ -1,7 +1,7 @@
 #include "bench/bench_scenes.h"
 
 #include "backends/registry.h"
-#include "cli/crosscheck/ray_generation.h"
+#include "harness/crosscheck/ray_generation.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/fp_mode.h"
 

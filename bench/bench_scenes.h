@@ -6,7 +6,7 @@
 // others), so the caches below hold one scene at a time: asking for another scene drops the previous one
 // with its backends and rays. That keeps the 4M-triangle scenes of the scale series from piling up.
 
-#include "cli/crosscheck/ray_kinds.h"
+#include "harness/crosscheck/ray_kinds.h"
 #include "core/backend/backend.h"
 #include "core/scene/procedural_bench.h"
 #include "core/scene/scene.h"

@@ -2,9 +2,9 @@
 
 #include "backends/registry.h"
 #include "cli/commands.h"
-#include "cli/converge/converge_output.h"
-#include "cli/converge/convergence_study.h"
-#include "cli/converge/reference_cache.h"
+#include "harness/converge/converge_output.h"
+#include "harness/converge/convergence_study.h"
+#include "harness/converge/reference_cache.h"
 #include "core/image/image_io.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/atomic_file.h"

@@ -2,8 +2,8 @@
 // genuine mismatches on every ray kind, over several procedural scenes.
 
 #include "backends/registry.h"
-#include "cli/crosscheck/hit_comparison.h"
-#include "cli/crosscheck/ray_generation.h"
+#include "harness/crosscheck/hit_comparison.h"
+#include "harness/crosscheck/ray_generation.h"
 #include "core/scene/mesh_scene.h"
 #include "core/scene/procedural.h"
 #include "core/sampling/rng.h"

@@ -2,8 +2,8 @@
 // claim to handle it (bvh, brute, embree), plus the helpers the cases rely on, plus the command's contract
 // through the real binary.
 
-#include "cli/stress/stress_case.h"
-#include "cli/stress/stress_support.h"
+#include "harness/stress/stress_case.h"
+#include "harness/stress/stress_support.h"
 #include "cli_runner.h"
 #include "core/scene/procedural.h"
 #include "core/util/fp_mode.h"
