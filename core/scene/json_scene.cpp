@@ -89,11 +89,11 @@ class SceneParser {
       const JsonNode type = m.member("type");
       const std::string type_name = type.as_string();
       if (type_name == "diffuse") {
-        m.expect_object({"type", "albedo"});
+        m.expect_object({"type", "albedo", "two_sided"});
         material.type = MaterialType::Diffuse;
         material.albedo = reflectance_color(m.member("albedo"));
       } else if (type_name == "mirror") {
-        m.expect_object({"type", "reflectance"});
+        m.expect_object({"type", "reflectance", "two_sided"});
         material.type = MaterialType::Mirror;
         if (const auto r = m.optional_member("reflectance")) material.reflectance = reflectance_color(*r);
       } else if (type_name == "glass") {
@@ -104,13 +104,14 @@ class SceneParser {
           if (!(material.ior > 0.0f)) ior->fail("ior must be positive, got " + ior->json().dump());
         }
       } else if (type_name == "emissive") {
-        m.expect_object({"type", "radiance", "albedo"});
+        m.expect_object({"type", "radiance", "albedo", "two_sided"});
         material.type = MaterialType::Emissive;
         material.radiance = m.member("radiance").as_color();
         if (const auto albedo = m.optional_member("albedo")) material.albedo = reflectance_color(*albedo);
       } else {
         type.fail("unknown material type '" + type_name + "' (expected diffuse, mirror, glass or emissive)");
       }
+      if (const auto sided = m.optional_member("two_sided")) material.two_sided = sided->as_bool();
       material_index_.emplace(name, static_cast<std::uint32_t>(scene_.materials.size()));
       scene_.materials.push_back(std::move(material));
     }

@@ -31,6 +31,10 @@ struct Material {
   glm::vec3 reflectance{1.0f};  // Mirror
   float ior = 1.5f;             // Glass: interior index of refraction, exterior is 1
   glm::vec3 radiance{0.0f};     // Emissive: one-sided, on the front (geometric normal) side
+  // Diffuse, Mirror, and an Emissive's albedo: false makes the surface black seen from its back (the side
+  // its geometric normal points away from), like Mitsuba 3's BSDFs without `twosided`. Glass has two sides
+  // by nature and ignores it.
+  bool two_sided = true;
 };
 
 enum class ShapeKind { Mesh, Sphere };
