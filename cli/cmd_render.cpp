@@ -29,6 +29,7 @@ struct RenderCommandOptions {
   std::string integrator = "path";
   std::string strategy = "mis";
   std::string env_sampling = "importance";
+  std::string sampler = "sobol";
   std::optional<int> spp;
   std::optional<double> time_seconds;
   std::optional<int> max_depth;
@@ -86,6 +87,8 @@ int run_render(const RenderCommandOptions& opt) {
   if (opt.env_sampling == "importance") ro.env_importance_sampling = true;
   else if (opt.env_sampling == "uniform") ro.env_importance_sampling = false;
   else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
+  if (const std::optional<SamplerKind> k = parse_sampler_kind(opt.sampler)) ro.sampler = *k;
+  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol, independent)");
   if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
   if (opt.spp && *opt.spp < 1) return report_bad_input("render", "--spp must be at least 1");
   if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return report_bad_input("render", "--time must be positive");
@@ -181,7 +184,8 @@ int run_render(const RenderCommandOptions& opt) {
              static_cast<double>(build.memory_bytes) / (1024.0 * 1024.0));
   fmt::print("integrator   {} (strategy {}, env sampling {}, max depth {}, rr depth {})\n", to_string(ro.integrator),
              to_string(ro.settings.strategy), opt.env_sampling, depth_text, ro.settings.rr_depth);
-  fmt::print("image        {}x{}, {} spp, seed {}, {} threads\n", image.width, image.height, st.spp, ro.seed, threads);
+  fmt::print("image        {}x{}, {} spp, seed {}, sampler {}, {} threads\n", image.width, image.height, st.spp, ro.seed,
+             to_string(ro.sampler), threads);
   for (const FeatureNote& n : features.notes)
     fmt::print("feature      {}: {}\n", n.name, n.used ? "used" : "left out (" + n.reason + ")");
   fmt::print("time         {:.3f} s\n", st.seconds);
@@ -213,6 +217,7 @@ int run_render(const RenderCommandOptions& opt) {
         {"height", image.height},
         {"spp", st.spp},
         {"seed", ro.seed},
+        {"sampler", to_string(ro.sampler)},
         {"threads", threads},
         {"time_budget_seconds", ro.time_budget_seconds > 0.0 ? nlohmann::json(ro.time_budget_seconds) : nlohmann::json(nullptr)},
         {"build_seconds", build.build_seconds},
@@ -260,6 +265,8 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
                                                  "(default: the scene's render.max_depth)");
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on")->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
+  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol (Owen-scrambled, default) or independent")
+      ->capture_default_str();
   cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->capture_default_str();
   cmd->add_option("-o,--output", opt->output, "Linear float EXR (default SCENE-STEM.exr when no --png is given)");
   cmd->add_option("--png", opt->png, "sRGB 8-bit PNG");
