@@ -26,7 +26,7 @@ struct CompareCommandOptions {
   std::string backend = "bvh";
   std::optional<std::uint64_t> seed;
   int threads = 0;
-  int rr_depth = 5;
+  std::optional<int> rr_depth;
   std::string variant = "auto";
   std::string reference;
   std::string out;
@@ -65,7 +65,7 @@ int run_compare_command(const CompareCommandOptions& opt) {
   s.backend = opt.backend;
   s.seed = opt.seed.value_or(scene.render.seed);
   s.threads = opt.threads;
-  s.rr_depth = opt.rr_depth;
+  s.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   s.mitsuba_variant = opt.variant;
   s.reference = opt.reference;
   s.out = opt.out.empty() ? std::filesystem::path("compare-" + std::filesystem::path(opt.scene).stem().string())
@@ -123,7 +123,7 @@ void add_compare_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--backend", opt->backend, "twinray's backend")->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Seed (default: the scene's render.seed)");
   cmd->add_option("--threads", opt->threads, "Worker threads of both renderers (0 = all cores)")->capture_default_str();
-  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette depth of both renderers")->capture_default_str();
+  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette depth of both renderers (default: the scene's)");
   cmd->add_option("--variant", opt->variant, "Mitsuba variant: auto (llvm_ad_rgb, else scalar_rgb), llvm_ad_rgb, scalar_rgb")->capture_default_str();
   cmd->add_option("--reference", opt->reference, "Reference image: relMSE of both renders against it");
   cmd->add_option("--out", opt->out, "Output folder (default compare-SCENE-STEM)");

@@ -72,6 +72,7 @@ int run_converge(const ConvergeCommandOptions& opt) {
                        " has no environment map");
   settings.budget_seconds = opt.budget_seconds;
   settings.max_depth = scene.render.max_depth;
+  settings.rr_depth = scene.render.rr_depth;
   settings.seed = opt.seed.value_or(scene.render.seed);
 
   std::optional<tbb::global_control> thread_limit;

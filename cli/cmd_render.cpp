@@ -33,7 +33,7 @@ struct RenderCommandOptions {
   std::optional<int> spp;
   std::optional<double> time_seconds;
   std::optional<int> max_depth;
-  int rr_depth = 5;
+  std::optional<int> rr_depth;
   std::optional<std::uint64_t> seed;
   int threads = 0;
   std::string output;
@@ -94,7 +94,7 @@ int run_render(const RenderCommandOptions& opt) {
   if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return report_bad_input("render", "--time must be positive");
   if (opt.max_depth && (*opt.max_depth == 0 || *opt.max_depth < -1))
     return report_bad_input("render", "--max-depth must be -1 (unlimited) or at least 1");
-  if (opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
+  if (opt.rr_depth && *opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
   if (opt.threads < 0) return report_bad_input("render", "--threads must be positive (0 = all cores)");
   std::string aux_error;
   const std::optional<AuxChannels> aux = parse_aux(opt.aux, aux_error);
@@ -121,7 +121,7 @@ int run_render(const RenderCommandOptions& opt) {
   ro.spp = opt.spp.value_or(scene.render.spp);
   ro.time_budget_seconds = opt.time_seconds.value_or(0.0);
   ro.settings.max_depth = opt.max_depth.value_or(scene.render.max_depth);
-  ro.settings.rr_depth = opt.rr_depth;
+  ro.settings.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   ro.seed = opt.seed.value_or(scene.render.seed);
   ro.aux = *aux;
   if (ro.spp < 1) return report_bad_input("render", "the scene's render.spp must be at least 1");
@@ -263,7 +263,7 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--time", opt->time_seconds, "Render passes of 1 spp until SECONDS have passed (instead of --spp)");
   cmd->add_option("--max-depth", opt->max_depth, "Path segments: 1 emitters only, 2 direct light, -1 unlimited "
                                                  "(default: the scene's render.max_depth)");
-  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on")->capture_default_str();
+  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
   cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol (Owen-scrambled, default) or independent")
       ->capture_default_str();

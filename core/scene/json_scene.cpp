@@ -304,13 +304,15 @@ class SceneParser {
   }
 
   void parse_render(const JsonNode& node) {
-    node.expect_object({"spp", "max_depth", "seed"});
+    node.expect_object({"spp", "max_depth", "rr_depth", "seed"});
     RenderSettings& r = scene_.render;
     if (const auto spp = node.optional_member("spp")) r.spp = static_cast<int>(spp->as_integer(1, kMaxSpp));
     if (const auto depth = node.optional_member("max_depth")) {
       r.max_depth = static_cast<int>(depth->as_integer(-1, std::numeric_limits<int>::max()));
       if (r.max_depth == 0) depth->fail("max_depth must be -1 (unlimited) or at least 1, got 0");
     }
+    if (const auto rr = node.optional_member("rr_depth"))
+      r.rr_depth = static_cast<int>(rr->as_integer(1, std::numeric_limits<int>::max()));
     if (const auto seed = node.optional_member("seed")) r.seed = seed->as_unsigned();
   }
 

@@ -13,7 +13,7 @@
 #include <cstring>
 #include <sstream>
 #include <system_error>
-#include <unordered_map>
+#include <set>
 
 namespace twinray {
 namespace {
@@ -43,19 +43,21 @@ std::string mesh_file_name(std::uint32_t geom_id, const std::string& name) {
   return fmt::format("meshes/{:03}-{}.ply", geom_id, clean.empty() ? "shape" : clean);
 }
 
-std::string material_id(std::size_t index) { return fmt::format("material-{}", index); }
+// Material names are unique within a scene (JSON object keys), so they serve as XML ids as they are; the
+// importer reads them back as the materials' names.
+std::string material_id(const Material& m) { return m.name; }
 
 // The BSDF of a material; two-sided ones inside `twosided`.
-void add_bsdf(pugi::xml_node scene_node, const Material& m, std::size_t index) {
+void add_bsdf(pugi::xml_node scene_node, const Material& m) {
   pugi::xml_node outer = scene_node.append_child("bsdf");
   const bool wrap = m.type != MaterialType::Glass && m.two_sided;
   pugi::xml_node bsdf = outer;
   if (wrap) {
     outer.append_attribute("type") = "twosided";
-    outer.append_attribute("id") = material_id(index).c_str();
+    outer.append_attribute("id") = material_id(m).c_str();
     bsdf = outer.append_child("bsdf");
   } else {
-    outer.append_attribute("id") = material_id(index).c_str();
+    outer.append_attribute("id") = material_id(m).c_str();
   }
   switch (m.type) {
     case MaterialType::Diffuse:
@@ -78,7 +80,6 @@ void add_bsdf(pugi::xml_node scene_node, const Material& m, std::size_t index) {
       break;
   }
   // The material's name, for a reader of the XML (Mitsuba ignores comments).
-  outer.prepend_child(pugi::node_comment).set_value((" twinray material '" + m.name + "' ").c_str());
 }
 
 struct GeometryRef {
@@ -149,28 +150,39 @@ pugi::xml_document build_document(const Scene& scene, const MitsubaExportOptions
   add_value(film, "string", "pixel_format", "rgb");
   film.append_child("rfilter").append_attribute("type") = "box";
 
-  for (std::size_t i = 0; i < scene.materials.size(); ++i) add_bsdf(root, scene.materials[i], i);
+  std::set<std::string> used_ids;
+  for (const Material& m : scene.materials) {
+    add_bsdf(root, m);
+    used_ids.insert(material_id(m));
+  }
 
   const std::vector<GeometryRef> geometry = geometry_by_id(scene);
-  for (std::uint32_t id = 0; id < scene.shapes.size(); ++id) {
-    const ShapeInfo& info = scene.shapes[id];
-    const GeometryRef& g = geometry[id];
+  for (std::uint32_t id_number = 0; id_number < scene.shapes.size(); ++id_number) {
+    const ShapeInfo& info = scene.shapes[id_number];
+    const GeometryRef& g = geometry[id_number];
     if (g.mesh == nullptr && g.sphere == nullptr) continue;  // every triangle was degenerate: nothing to draw
     pugi::xml_node shape = root.append_child("shape");
-    shape.append_child(pugi::node_comment).set_value((" twinray shape '" + info.name + "' ").c_str());
+    // Mitsuba's ids are global and unique: a shape whose name is taken (by a material or another shape)
+    // gets its geometry id appended.
+    std::string id = info.name;
+    if (!used_ids.insert(id).second) {
+      id = fmt::format("{}-{}", info.name, id_number);
+      used_ids.insert(id);
+    }
+    shape.append_attribute("id") = id.c_str();
     if (g.sphere != nullptr) {
-      shape.append_attribute("type") = "sphere";
+      shape.prepend_attribute("type") = "sphere";
       pugi::xml_node center = shape.append_child("point");
       center.append_attribute("name") = "center";
       center.append_attribute("value") = vec(g.sphere->center).c_str();
       add_value(shape, "float", "radius", num(g.sphere->radius));
     } else {
-      shape.append_attribute("type") = "ply";
-      add_value(shape, "string", "filename", mesh_file_name(id, info.name));
+      shape.prepend_attribute("type") = "ply";
+      add_value(shape, "string", "filename", mesh_file_name(id_number, info.name));
       add_value(shape, "boolean", "face_normals", "true");
     }
     const Material& m = scene.materials[info.material];
-    shape.append_child("ref").append_attribute("id") = material_id(info.material).c_str();
+    shape.append_child("ref").append_attribute("id") = material_id(m).c_str();
     if (m.type == MaterialType::Emissive) {
       pugi::xml_node emitter = shape.append_child("emitter");
       emitter.append_attribute("type") = "area";

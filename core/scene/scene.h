@@ -60,6 +60,7 @@ struct Environment {
 struct RenderSettings {
   int spp = 16;
   int max_depth = -1;  // Mitsuba 3 convention: 1 = emitters only, 2 = direct only, -1 = unlimited
+  int rr_depth = 5;    // Russian roulette from this many segments on (Mitsuba's rr_depth)
   std::uint64_t seed = 0;
 };
 
