@@ -117,6 +117,7 @@ int run_render(const RenderCommandOptions& opt) {
     }
     scene.environment.type = EnvironmentType::Image;
     scene.environment.image = std::filesystem::absolute(opt.env);
+    scene.environment.pixels.reset();
   }
   ro.spp = opt.spp.value_or(scene.render.spp);
   ro.time_budget_seconds = opt.time_seconds.value_or(0.0);

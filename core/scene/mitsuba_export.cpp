@@ -1,5 +1,6 @@
 #include "core/scene/mitsuba_export.h"
 
+#include "core/image/image_io.h"
 #include "core/util/atomic_file.h"
 #include "core/util/input_error.h"
 
@@ -45,6 +46,13 @@ std::string mesh_file_name(std::uint32_t geom_id, const std::string& name) {
 
 // Material names are unique within a scene (JSON object keys), so they serve as XML ids as they are; the
 // importer reads them back as the materials' names.
+// A procedural map is written as EXR under its name; a file keeps its name.
+std::string environment_file_name(const Environment& env) {
+  std::filesystem::path name = env.image.filename();
+  if (env.pixels) name.replace_extension(".exr");
+  return name.string();
+}
+
 std::string material_id(const Material& m) { return m.name; }
 
 // The BSDF of a material; two-sided ones inside `twosided`.
@@ -198,7 +206,7 @@ pugi::xml_document build_document(const Scene& scene, const MitsubaExportOptions
   } else if (env.type == EnvironmentType::Image) {
     pugi::xml_node e = root.append_child("emitter");
     e.append_attribute("type") = "envmap";
-    add_value(e, "string", "filename", "textures/" + env.image.filename().string());
+    add_value(e, "string", "filename", "textures/" + environment_file_name(env));
     add_value(e, "float", "scale", num(env.scale));
     pugi::xml_node t = e.append_child("transform");
     t.append_attribute("name") = "to_world";
@@ -257,9 +265,13 @@ std::filesystem::path export_mitsuba_scene(const Scene& scene, const std::filesy
       write_file_atomically(out_dir / mesh_file_name(id, scene.shapes[id].name), ply_bytes(*geometry[id].mesh));
   if (scene.environment.type == EnvironmentType::Image) {
     std::filesystem::create_directories(out_dir / "textures", ec);
-    const std::filesystem::path target = out_dir / "textures" / scene.environment.image.filename();
-    std::filesystem::copy_file(scene.environment.image, target, std::filesystem::copy_options::overwrite_existing, ec);
-    if (ec) throw InputError(scene.environment.image, "", "cannot copy the environment map to " + target.string() + ": " + ec.message());
+    const std::filesystem::path target = out_dir / "textures" / environment_file_name(scene.environment);
+    if (scene.environment.pixels) {
+      write_exr(target, *scene.environment.pixels);
+    } else {
+      std::filesystem::copy_file(scene.environment.image, target, std::filesystem::copy_options::overwrite_existing, ec);
+      if (ec) throw InputError(scene.environment.image, "", "cannot copy the environment map to " + target.string() + ": " + ec.message());
+    }
   }
   const std::filesystem::path xml = out_dir / "scene.xml";
   write_file_atomically(xml, mitsuba_scene_xml(scene, options));

@@ -3,11 +3,13 @@
 // settings. Produced by load_scene() (core/scene/scene_loader.h) from a JSON scene or a bare OBJ/PLY mesh.
 
 #include "core/geometry/scene_geometry.h"
+#include "core/image/image.h"
 
 #include <glm/vec3.hpp>
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -55,6 +57,9 @@ struct Environment {
   std::filesystem::path image;    // Image: latitude-longitude .hdr/.exr, top row = +Y (zenith)
   float rotation_deg = 0.0f;      // Image: rotation about +Y
   float scale = 1.0f;             // Image: radiance multiplier
+  // Image: the texels in memory (a procedural map, such as the sky of a bare mesh); when set, `image` is
+  // only the map's name and no file is read.
+  std::shared_ptr<const Image> pixels;
 };
 
 struct RenderSettings {
@@ -74,6 +79,7 @@ struct LoadReport {
 struct Scene {
   std::filesystem::path source;  // the scene or mesh file it was loaded from
   bool from_bare_mesh = false;   // true when a bare OBJ/PLY was wrapped in a default scene
+  std::vector<std::string> additions;  // what the default scene added around a bare mesh (twinray info)
   CameraDesc camera;
   std::vector<Material> materials;
   std::vector<ShapeInfo> shapes;  // indexed by geometry id
