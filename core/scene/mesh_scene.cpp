@@ -91,8 +91,9 @@ Scene load_bare_mesh_scene(const std::filesystem::path& mesh_file) {
 
   TriangleMesh mesh = read_mesh_file(mesh_file, scene.report);
   mesh.geom_id = 0;
-  const Bounds3 bounds = mesh.bounds();
   scene.geometry.meshes.push_back(std::move(mesh));
+  clean_geometry(scene.geometry, scene.report);
+  const Bounds3 bounds = scene.geometry.bounds();  // of what is left: degenerate triangles do not count
 
   Material grey;
   grey.name = "mesh";
@@ -125,11 +126,11 @@ Scene load_bare_mesh_scene(const std::filesystem::path& mesh_file) {
                         {static_cast<float>(c.x + half), y, static_cast<float>(c.z + half)},
                         {static_cast<float>(c.x + half), y, static_cast<float>(c.z - half)}};
     ground.indices = {{0, 1, 2}, {0, 2, 3}};  // front (counter-clockwise) faces +Y
+    ensure_vertex_padding(ground.positions);
     scene.geometry.meshes.push_back(std::move(ground));
     scene.shapes.push_back({"ground plane", ShapeKind::Mesh, 1, {}});
     scene.additions.push_back(fmt::format("ground plane at y = {:.6g}, {:.6g} wide, albedo 0.32 (geometry id 1)", y, 2.0 * half));
   }
-  clean_geometry(scene.geometry, scene.report);
 
   scene.environment.type = EnvironmentType::Image;
   scene.environment.image = "sky-with-sun";
