@@ -29,7 +29,7 @@ int run_export(const ExportOptions& opt) {
   Scene scene = load_scene(opt.scene);
   if (opt.spp) scene.render.spp = *opt.spp;
   MitsubaExportOptions mo;
-  mo.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
+  mo.rr_depth = opt.rr_depth;
   const std::filesystem::path xml = export_mitsuba_scene(scene, opt.out_dir, mo);
   fmt::print("wrote        {} ({} shapes, {} materials)\n", xml.string(), scene.shapes.size(), scene.materials.size());
   return kExitOk;

@@ -119,7 +119,7 @@ pugi::xml_document build_document(const Scene& scene, const MitsubaExportOptions
   pugi::xml_node integrator = root.append_child("integrator");
   integrator.append_attribute("type") = "path";
   add_value(integrator, "integer", "max_depth", std::to_string(scene.render.max_depth));
-  add_value(integrator, "integer", "rr_depth", std::to_string(options.rr_depth));
+  add_value(integrator, "integer", "rr_depth", std::to_string(options.rr_depth.value_or(scene.render.rr_depth)));
 
   // Clip planes that clip nothing: twinray has none. The near plane stays well below any distance in the
   // scene, the far plane beyond its farthest point.

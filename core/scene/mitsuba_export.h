@@ -14,18 +14,19 @@
 //  - meshes -> `ply` with face_normals (twinray shades with geometric normals only), spheres -> `sphere`;
 //  - environment: constant -> `constant`; image -> `envmap` with `scale` and a to_world rotation about +Y
 //    of 180 + rotation degrees (Mitsuba's map centre column faces +Z, twinray's faces -Z).
-// Sample count and seed come from the scene's render settings; the sample count is the XML default
+// Sample count, seed, max_depth and rr_depth come from the scene's render settings; the sample count is the XML default
 // parameter `spp`, so `mitsuba.load_file(path, spp=N)` overrides it.
 
 #include "core/scene/scene.h"
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace twinray {
 
 struct MitsubaExportOptions {
-  int rr_depth = 5;  // twinray's --rr-depth
+  std::optional<int> rr_depth;  // overrides the scene's render.rr_depth (twinray's --rr-depth)
 };
 
 // Writes the files; returns the path of scene.xml. Throws InputError naming the file it could not write
