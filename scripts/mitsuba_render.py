@@ -14,7 +14,10 @@ structure) and one untimed warm-up render (which compiles the LLVM kernels, cach
 reported apart, as twinray's render time excludes its BVH build.
 
 With --time S, batches of --spp samples are rendered until S seconds have passed (at least --batches of
-them). Variant: --variant auto tries llvm_ad_rgb (needs LLVM 19: DRJIT_LIBLLVM_PATH, set here to Debian's
+them). With --sweep S (for `twinray converge --peer mitsuba`), one image per sample count 1, 2, 4, ... is
+rendered (each after its own untimed warm-up, since the sample count is compiled into the kernel) until the
+next one would take the total past S seconds or --max-spp is reached; OUT's stem gets "-SPP" per image and
+the JSON lists {"spp", "seconds", "image"} under "points". Variant: --variant auto tries llvm_ad_rgb (needs LLVM 19: DRJIT_LIBLLVM_PATH, set here to Debian's
 libLLVM.so.19.1 when unset) and falls back to scalar_rgb; the JSON says which ran.
 """
 import argparse
@@ -37,6 +40,8 @@ def parse_args():
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=0, help="0 = all cores")
     p.add_argument("--variant", default="auto", help="auto, llvm_ad_rgb or scalar_rgb")
+    p.add_argument("--sweep", type=float, default=0.0, help="error-against-time sweep with this budget (seconds)")
+    p.add_argument("--max-spp", type=int, default=1 << 16)
     return p.parse_args()
 
 
@@ -81,6 +86,10 @@ def main():
         arr = np.array(img, dtype=np.float64)  # forces evaluation
         return arr[:, :, :3]
 
+    if args.sweep > 0.0:
+        sweep(args, mi, dr, np, scene, variant, load_seconds)
+        return
+
     start = time.perf_counter()
     render(args.seed + 0x7FFF0000)  # warm-up: kernel compilation, first-touch allocations; not in the image
     warmup_seconds = time.perf_counter() - start
@@ -120,6 +129,29 @@ def main():
     }
     with open(args.json, "w") as f:
         json.dump(result, f, indent=2)
+        f.write("\n")
+
+
+def sweep(args, mi, dr, np, scene, variant, load_seconds):
+    root, ext = os.path.splitext(args.out)
+    points = []
+    used = 0.0
+    spp = 1
+    while spp <= args.max_spp:
+        if len(points) >= 2 and used + 2.0 * points[-1]["seconds"] > args.sweep:
+            break
+        np.array(mi.render(scene, spp=spp, seed=args.seed + 0x7FFF0000))  # warm-up: compiles this spp's kernel
+        t0 = time.perf_counter()
+        img = np.array(mi.render(scene, spp=spp, seed=args.seed), dtype=np.float32)[:, :, :3]
+        seconds = time.perf_counter() - t0
+        used += seconds
+        path = f"{root}-{spp}{ext}"
+        mi.Bitmap(img, pixel_format=mi.Bitmap.PixelFormat.RGB).write(path)
+        points.append({"spp": spp, "seconds": seconds, "image": path})
+        spp *= 2
+    with open(args.json, "w") as f:
+        json.dump({"variant": variant, "mitsuba_version": mi.__version__, "threads": dr.thread_count(),
+                   "load_seconds": load_seconds, "points": points}, f, indent=2)
         f.write("\n")
 
 

@@ -6,6 +6,7 @@
 #include "scene_test_files.h"
 
 #include "harness/compare/compare_run.h"
+#include "harness/converge/peer_series.h"
 #include "core/image/image_io.h"
 #include "core/scene/mitsuba_export.h"
 #include "core/scene/mitsuba_scene.h"
@@ -323,6 +324,34 @@ TEST(MitsubaPeer, CompareAgreesOnTheCornellBoxAndFindsAChangedScene) {
   const compare::Comparison c = compare::compare_images(same.twinray.image, peer.image);
   EXPECT_FALSE(c.agree);
   EXPECT_GT(c.differing.size(), 10u);
+}
+
+}  // namespace
+}  // namespace twinray
+
+namespace twinray {
+namespace {
+
+// converge --peer mitsuba: Mitsuba's error-against-time series at doubling sample counts.
+TEST(MitsubaPeer, ConvergeSeriesHasDoublingPoints) {
+  std::string why;
+  if (!compare::probe_mitsuba(&why)) GTEST_SKIP() << why;
+  TempFolder folder;
+  Scene scene = load_scene(std::filesystem::path(TWINRAY_SOURCE_DIR) / "scenes/cornell-box-reference.json");
+  scene.camera.width = scene.camera.height = 32;
+  RenderOptions o;
+  o.spp = 64;
+  const Image reference = render_scene(scene, o).mean;
+  converge::StudySettings settings;
+  settings.budget_seconds = 0.5;
+  settings.max_spp = 8;
+  const converge::ConvergeSeries s =
+      converge::mitsuba_series(scene, reference, settings, folder.path() / "mitsuba", 2, [](const std::string&) {});
+  EXPECT_EQ(s.backend, "mitsuba");
+  ASSERT_GE(s.points.size(), 2u);
+  for (std::size_t i = 0; i < s.points.size(); ++i) EXPECT_EQ(s.points[i].spp, 1 << i);
+  // More samples, less error (each point halves the variance; 1 -> 2 spp can only fail by chance at 32x32).
+  EXPECT_LT(s.points.back().error.rel_mse, s.points.front().error.rel_mse);
 }
 
 }  // namespace

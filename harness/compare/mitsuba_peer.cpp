@@ -142,4 +142,28 @@ MitsubaRender render_with_mitsuba(const MitsubaInstall& install, const MitsubaRe
   return r;
 }
 
+MitsubaSweep sweep_with_mitsuba(const MitsubaInstall& install, const std::filesystem::path& scene_xml,
+                                const std::filesystem::path& work_dir, double budget_seconds, int max_spp,
+                                std::uint64_t seed, int threads, const std::string& variant) {
+  std::filesystem::create_directories(work_dir);
+  const std::filesystem::path json = work_dir / "sweep.json", log = work_dir / "sweep.log";
+  std::filesystem::remove(log);
+  const std::vector<std::string> args = {install.python.string(), install.driver.string(), scene_xml.string(),
+                                         "--out", (work_dir / "mitsuba.exr").string(), "--json", json.string(),
+                                         "--sweep", fmt::format("{}", budget_seconds), "--max-spp", std::to_string(max_spp),
+                                         "--seed", std::to_string(seed & 0x3fffffffu), "--threads", std::to_string(threads),
+                                         "--variant", variant};
+  const int rc = run_process(args, log);
+  if (rc != 0)
+    throw std::runtime_error(fmt::format("Mitsuba failed (exit {}) on {}; its log {}:\n{}", rc, scene_xml.string(),
+                                         log.string(), tail_of(log)));
+  std::ifstream in(json);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  MitsubaSweep s;
+  s.variant = j.at("variant").get<std::string>();
+  for (const nlohmann::json& p : j.at("points"))
+    s.points.push_back({p.at("spp").get<int>(), p.at("seconds").get<double>(), rgb(read_image(p.at("image").get<std::string>()))});
+  return s;
+}
+
 }  // namespace twinray::compare

@@ -58,6 +58,24 @@ struct MitsubaRender {
   std::vector<double> pass_seconds;
 };
 
+struct MitsubaSweepPoint {
+  int spp = 0;
+  double seconds = 0.0;  // this render alone (its kernel compiled beforehand, untimed)
+  Image image;
+};
+
+struct MitsubaSweep {
+  std::string variant;
+  std::vector<MitsubaSweepPoint> points;
+};
+
+// Error-against-time points for `converge --peer mitsuba`: one render per sample count 1, 2, 4, ... until
+// the next would take the total past `budget_seconds` (at least two points) or max_spp; images go to
+// work_dir. Throws as render_with_mitsuba does.
+MitsubaSweep sweep_with_mitsuba(const MitsubaInstall& install, const std::filesystem::path& scene_xml,
+                                const std::filesystem::path& work_dir, double budget_seconds, int max_spp,
+                                std::uint64_t seed, int threads, const std::string& variant = "auto");
+
 // Runs the driver and reads its outputs. Throws MitsubaUnavailable when Mitsuba is not installed and
 // std::runtime_error (with the driver's log path) when the render fails.
 MitsubaRender render_with_mitsuba(const MitsubaInstall& install, const MitsubaRenderRequest& request);
