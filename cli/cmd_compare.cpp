@@ -5,6 +5,7 @@
 #include "cli/commands.h"
 #include "harness/compare/compare_run.h"
 #include "core/scene/scene_loader.h"
+#include "core/util/atomic_file.h"
 
 #include <fmt/core.h>
 #include <tbb/global_control.h>
@@ -103,10 +104,7 @@ int run_compare_command(const CompareCommandOptions& opt) {
   }
   fmt::print("verdict      {}\n", c.agree ? "agree (within noise)" : fmt::format("differ ({} region-channels)", c.differing.size()));
   fmt::print("wrote        {}\n", s.out.string());
-  if (!opt.json.empty()) {
-    const std::filesystem::path json_path = opt.json;
-    std::filesystem::copy_file(s.out / "compare.json", json_path, std::filesystem::copy_options::overwrite_existing);
-  }
+  if (!opt.json.empty()) write_file_atomically(opt.json, r.json.dump(2) + "\n");
   return c.agree ? kExitOk : kExitCheckFailed;
 }
 

@@ -108,5 +108,16 @@ TEST(ImageComparison, NoiselessDifferenceIsInfinitelySignificant) {
   EXPECT_TRUE(std::isinf(c.max_abs_z));
 }
 
+TEST(ImageComparison, RoundingDifferencesOfNoiselessRegionsAgree) {
+  // A constant sky of 0.3 in both, one renderer a float ulp higher everywhere (what rounding a constant
+  // differently gives): below the numerical floor (1e-5 relative). A 1e-3 relative difference is not.
+  NoisyImage a{Image(32, 32, 3), Image(32, 32, 3)}, b{Image(32, 32, 3), Image(32, 32, 3)};
+  for (float& v : a.mean.data) v = 0.3f;
+  for (float& v : b.mean.data) v = std::nextafter(0.3f, 1.0f);
+  EXPECT_TRUE(compare_images(a, b).agree);
+  for (float& v : b.mean.data) v = 0.3f * 1.001f;
+  EXPECT_FALSE(compare_images(a, b).agree);
+}
+
 }  // namespace
 }  // namespace twinray::compare

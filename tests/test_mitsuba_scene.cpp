@@ -166,6 +166,7 @@ TEST(MitsubaImport, ErrorsNameTheElementAndLine) {
       {"sphere flip", xml_scene("  <shape type=\"sphere\">\n    <boolean name=\"flip_normals\" value=\"true\"/>\n  </shape>\n"), 10, "flip_normals on a sphere"},
       {"sheared sphere", xml_scene("  <shape type=\"sphere\">\n    <transform name=\"to_world\"><scale x=\"2\"/></transform>\n  </shape>\n"), 10, "sphere"},
       {"point light", xml_scene("  <emitter type=\"point\"/>\n"), 10, "emitter 'point'"},
+      {"sphere beyond float", xml_scene("  <shape type=\"sphere\"><float name=\"radius\" value=\"3e38\"/>\n    <transform name=\"to_world\"><scale value=\"10\"/></transform></shape>\n"), 10, "outside float range"},
       {"tilted envmap", xml_scene("  <emitter type=\"constant\"/>\n  <emitter type=\"constant\"/>\n"), 11, "second environment"},
       {"projective matrix", xml_scene("  <shape type=\"cube\">\n    <transform name=\"to_world\">\n      <matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 1 1\"/>\n    </transform>\n  </shape>\n"), 12, "last row must be 0 0 0 1"},
       {"transform op", xml_scene("  <shape type=\"cube\">\n    <transform name=\"to_world\">\n      <shear value=\"1\"/>\n    </transform>\n  </shape>\n"), 12, "<shear> inside <transform>"},

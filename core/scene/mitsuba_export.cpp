@@ -46,11 +46,20 @@ std::string mesh_file_name(std::uint32_t geom_id, const std::string& name) {
 
 // Material names are unique within a scene (JSON object keys), so they serve as XML ids as they are; the
 // importer reads them back as the materials' names.
-// A procedural map is written as EXR under its name; a file keeps its name.
-std::string environment_file_name(const Environment& env) {
+// A procedural or resampled map is written as EXR under its name; a copied file keeps its name.
+std::string environment_file_name(const Environment& env, const MitsubaExportOptions& options) {
   std::filesystem::path name = env.image.filename();
-  if (env.pixels) name.replace_extension(".exr");
+  if (env.pixels || options.env_upsample > 1) name.replace_extension(".exr");
   return name.string();
+}
+
+// Every texel repeated k x k times (RGB of the first three channels, grey repeated).
+Image upsampled(const Image& map, int k) {
+  Image out(map.width * k, map.height * k, 3);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = map.at(x / k, y / k, std::min(c, map.channels - 1));
+  return out;
 }
 
 std::string material_id(const Material& m) { return m.name; }
@@ -206,7 +215,7 @@ pugi::xml_document build_document(const Scene& scene, const MitsubaExportOptions
   } else if (env.type == EnvironmentType::Image) {
     pugi::xml_node e = root.append_child("emitter");
     e.append_attribute("type") = "envmap";
-    add_value(e, "string", "filename", "textures/" + environment_file_name(env));
+    add_value(e, "string", "filename", "textures/" + environment_file_name(env, options));
     add_value(e, "float", "scale", num(env.scale));
     pugi::xml_node t = e.append_child("transform");
     t.append_attribute("name") = "to_world";
@@ -265,9 +274,10 @@ std::filesystem::path export_mitsuba_scene(const Scene& scene, const std::filesy
       write_file_atomically(out_dir / mesh_file_name(id, scene.shapes[id].name), ply_bytes(*geometry[id].mesh));
   if (scene.environment.type == EnvironmentType::Image) {
     std::filesystem::create_directories(out_dir / "textures", ec);
-    const std::filesystem::path target = out_dir / "textures" / environment_file_name(scene.environment);
-    if (scene.environment.pixels) {
-      write_exr(target, *scene.environment.pixels);
+    const std::filesystem::path target = out_dir / "textures" / environment_file_name(scene.environment, options);
+    if (scene.environment.pixels || options.env_upsample > 1) {
+      const Image map = scene.environment.pixels ? *scene.environment.pixels : read_image(scene.environment.image);
+      write_exr(target, upsampled(map, std::max(1, options.env_upsample)));
     } else {
       std::filesystem::copy_file(scene.environment.image, target, std::filesystem::copy_options::overwrite_existing, ec);
       if (ec) throw InputError(scene.environment.image, "", "cannot copy the environment map to " + target.string() + ": " + ec.message());

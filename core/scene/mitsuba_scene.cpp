@@ -467,9 +467,12 @@ class MitsubaParser {
     const glm::dvec3 forward = glm::normalize(glm::dvec3(to_world[2]));
     const glm::dvec3 up = glm::normalize(glm::dvec3(to_world[1]));
     cam.position = glm::vec3(origin);
-    cam.look_at = glm::vec3(origin + forward);
+    // One unit ahead; far from the origin a unit step can vanish in float, so step by the distance then.
+    cam.look_at = glm::vec3(origin + forward * std::max(1.0, 1e-3 * glm::length(origin)));
     cam.up = glm::vec3(up);
-    if (cam.look_at == cam.position) cam.look_at = glm::vec3(origin + forward * std::max(1.0, glm::length(origin)));
+    auto finite = [](const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    if (!finite(cam.position) || !finite(cam.look_at) || !finite(cam.up) || cam.look_at == cam.position)
+      fail(node, "the sensor's to_world places the camera outside float range");
   }
 
   void parse_sampler(const pugi::xml_node& node) {
@@ -652,6 +655,9 @@ class MitsubaParser {
           fail(node, e.what());
         }
       }
+      if (!std::isfinite(s.center.x) || !std::isfinite(s.center.y) || !std::isfinite(s.center.z) ||
+          !std::isfinite(s.radius) || !(s.radius > 0.0f))
+        fail(node, "the sphere lies outside float range (or its radius rounds to 0)");
       scene_.geometry.spheres.push_back(s);
     } else {
       fail(node, fmt::format("shape '{}' is not supported (obj, ply, sphere, rectangle, cube)", type));

@@ -24,6 +24,9 @@ constexpr int kPeerSppPerTimedBatch = 8;
 // The peer renders with seeds far from twinray's: not needed for independence (different generators), but
 // it keeps the seeds of the two distinguishable in logs.
 constexpr std::uint64_t kPeerSeedOffset = 1000;
+// Environment maps go to Mitsuba with each texel repeated 4 x 4 times (core/scene/mitsuba_export.h): its
+// bilinear lookup then differs from twinray's nearest-texel lookup only in bands a quarter texel wide.
+constexpr int kCompareEnvUpsample = 4;
 
 Image rgb_of(const Image& img) {
   if (img.channels == 3) return img;
@@ -140,8 +143,10 @@ CompareResult run_compare(const Scene& scene, const std::filesystem::path& scene
 
   Scene exported = scene;
   exported.render.spp = std::max(1, total_spp / batches);
-  const std::filesystem::path xml =
-      export_mitsuba_scene(exported, settings.out / "mitsuba", MitsubaExportOptions{settings.rr_depth});
+  MitsubaExportOptions export_options;
+  export_options.rr_depth = settings.rr_depth;
+  export_options.env_upsample = kCompareEnvUpsample;
+  const std::filesystem::path xml = export_mitsuba_scene(exported, settings.out / "mitsuba", export_options);
   MitsubaRenderRequest request;
   request.scene_xml = xml;
   request.out_exr = settings.out / "mitsuba.exr";

@@ -92,15 +92,17 @@ Comparison compare_images(const NoisyImage& a, const NoisyImage& b, int grid) {
     for (int rx = 0; rx < gx; ++rx) {
       const int x0 = rx * w / gx, x1 = (rx + 1) * w / gx, y0 = ry * h / gy, y1 = (ry + 1) * h / gy;
       for (int c = 0; c < 3; ++c) {
-        double diff = 0.0, var = 0.0;
+        double diff = 0.0, var = 0.0, level = 0.0;
         for (int y = y0; y < y1; ++y)
           for (int x = x0; x < x1; ++x) {
             diff += static_cast<double>(a.mean.at(x, y, c)) - static_cast<double>(b.mean.at(x, y, c));
             var += static_cast<double>(a.variance_of_mean.at(x, y, c)) + static_cast<double>(b.variance_of_mean.at(x, y, c));
+            level += 0.5 * std::abs(static_cast<double>(a.mean.at(x, y, c)) + static_cast<double>(b.mean.at(x, y, c)));
           }
         const double n = static_cast<double>((x1 - x0) * (y1 - y0));
         if (n == 0.0) continue;
-        RegionDifference r{x0, y0, x1, y1, c, diff / n, std::sqrt(var) / n, 0.0};
+        const double floor = kRelativeFloor * level / n;
+        RegionDifference r{x0, y0, x1, y1, c, diff / n, std::sqrt(var / (n * n) + floor * floor), 0.0};
         // A region where both images are exactly equal and noiseless (black) agrees; any difference without
         // noise to explain it is infinitely significant.
         if (r.standard_error > 0.0) r.z = r.difference / r.standard_error;

@@ -11,6 +11,12 @@
 // below, and the regions that do are listed. With regions of hundreds of pixels the sums make d / s close
 // to a standard normal under agreement, whatever the per-pixel distributions.
 //
+// Numerical floor: where both images are free of noise (a directly seen constant sky, a black region) the
+// standard error is 0 and any rounding difference would be infinitely significant. Both renderers compute in
+// 32-bit float and round constants differently by a few ulps, so the standard error of every region is
+// floored at kRelativeFloor times the region's mean value (1e-5: about 100 float ulps, far below any
+// difference that a scene change produces).
+//
 // Threshold: a family-wise false alarm rate of 1e-3 over all region-channel tests (Bonferroni): for 16 x 16
 // regions and 3 channels, 768 tests, the two-sided normal quantile of 1e-3 / 768 is 4.83. A difference of a
 // few standard errors in one region out of hundreds is what noise does; 4.83 happens by chance once in a
@@ -25,6 +31,7 @@ namespace twinray::compare {
 
 inline constexpr int kRegionGrid = 16;
 inline constexpr double kFamilyFalseAlarm = 1e-3;
+inline constexpr double kRelativeFloor = 1e-5;
 
 // relMSE's regulariser, as in harness/converge/error_metrics.h.
 inline constexpr double kRelMseEpsilon = 1e-2;
