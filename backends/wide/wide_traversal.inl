@@ -48,30 +48,38 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
   return false;
 }
 
-// Two or more hit children: returns the nearest and pushes the others, farthest first. Keys pack the
-// entry's bits above the child reference: entries are >= tmin >= 0, whose bit patterns order like their
-// values (a -0 entry sorts last, which only changes the order, never the answer).
+// Two or more hit children: returns the nearest and pushes the others, farthest first.
 TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigned mask, const float* entry,
                                                    StackEntry* stack, std::size_t& size) {
+  const unsigned a = static_cast<unsigned>(__builtin_ctz(mask));
+  mask &= mask - 1;
+  const unsigned b = static_cast<unsigned>(__builtin_ctz(mask));
+  mask &= mask - 1;
+  if (mask == 0) {  // the common case: exactly two
+    const bool a_first = entry[a] <= entry[b];
+    const unsigned near = a_first ? a : b, far = a_first ? b : a;
+    stack[size++] = StackEntry{node.child[far], entry[far]};
+    return node.child[near];
+  }
+  // Three or more: keys pack the entry's bits above the slot. Entries are >= tmin >= 0, whose bit patterns
+  // order like their values (a -0 entry sorts last, which only changes the order, never the answer).
   std::uint64_t keys[kWideWidth];
   int n = 0;
+  mask |= (1u << a) | (1u << b);
   for (; mask != 0; mask &= mask - 1) {
     const unsigned s = static_cast<unsigned>(__builtin_ctz(mask));
     std::uint32_t bits;
     std::memcpy(&bits, &entry[s], sizeof bits);
-    const std::uint64_t key = (std::uint64_t{bits} << 32) | node.child[s];
-    // Insertion into descending order.
-    int k = n++;
+    const std::uint64_t key = (std::uint64_t{bits} << 32) | s;
+    int k = n++;  // insertion into descending order
     for (; k > 0 && keys[k - 1] < key; --k) keys[k] = keys[k - 1];
     keys[k] = key;
   }
   for (int k = 0; k < n - 1; ++k) {
-    float e;
-    const auto bits = static_cast<std::uint32_t>(keys[k] >> 32);
-    std::memcpy(&e, &bits, sizeof e);
-    stack[size++] = StackEntry{static_cast<std::uint32_t>(keys[k]), e};
+    const auto s = static_cast<unsigned>(keys[k] & 7u);
+    stack[size++] = StackEntry{node.child[s], entry[s]};
   }
-  return static_cast<std::uint32_t>(keys[n - 1]);
+  return node.child[keys[n - 1] & 7u];
 }
 
 }  // namespace wide_detail
