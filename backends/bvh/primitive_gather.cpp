@@ -1,21 +1,30 @@
 #include "backends/bvh/primitive_gather.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 
 namespace twinray {
 
 std::vector<Bounds3> primitive_bounds(const SceneGeometry& geometry) {
-  std::vector<Bounds3> bounds;
-  bounds.reserve(geometry.primitive_count());
+  std::vector<Bounds3> bounds(geometry.primitive_count());
+  std::size_t at = 0;
   for (const TriangleMesh& mesh : geometry.meshes) {
-    for (const glm::uvec3& tri : mesh.indices) {
-      Bounds3 b = Bounds3::of_point(mesh.positions[tri.x]);
-      b.extend(mesh.positions[tri.y]);
-      b.extend(mesh.positions[tri.z]);
-      bounds.push_back(b);
-    }
+    // Large meshes in parallel blocks: a linear pass that would otherwise run alone before the build.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.indices.size(), 1u << 14),
+                      [&, at](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          const glm::uvec3& tri = mesh.indices[i];
+                          Bounds3 b = Bounds3::of_point(mesh.positions[tri.x]);
+                          b.extend(mesh.positions[tri.y]);
+                          b.extend(mesh.positions[tri.z]);
+                          bounds[at + i] = b;
+                        }
+                      });
+    at += mesh.indices.size();
   }
-  for (const Sphere& s : geometry.spheres) bounds.push_back(s.bounds());
+  for (const Sphere& s : geometry.spheres) bounds[at++] = s.bounds();
   return bounds;
 }
 
