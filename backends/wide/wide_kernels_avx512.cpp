@@ -1,5 +1,5 @@
 // The wide traversal kernels on AVX-512 (F, VL, DQ, BW): the AVX2 slab test on 256-bit registers with the
-// comparison into a mask register, and the hit children gathered by compress instructions.
+// comparison straight into a mask register (an 8-wide node fills 256 bits, so no wider rows).
 // See backends/simd/isa.h for how the instruction sets are chosen.
 
 #include "backends/wide/wide_kernels.h"
