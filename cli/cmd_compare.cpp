@@ -24,7 +24,7 @@ struct CompareCommandOptions {
   std::optional<int> spp;
   std::optional<double> time_seconds;
   int batches = 8;
-  std::string backend = "bvh";
+  std::string backend = "bvh8";  // render's default
   std::optional<std::uint64_t> seed;
   int threads = 0;
   std::optional<int> rr_depth;

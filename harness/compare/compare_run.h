@@ -30,7 +30,7 @@ struct CompareSettings {
   int spp = 0;                     // total samples per pixel (0: the scene's render.spp)
   double time_seconds = 0.0;       // > 0: each renderer renders for about this long instead of spp
   int batches = 8;
-  std::string backend = "bvh";
+  std::string backend = "bvh8";  // render's default
   std::uint64_t seed = 0;
   int threads = 0;                 // 0 = all cores
   int rr_depth = 5;
