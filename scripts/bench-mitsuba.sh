@@ -5,8 +5,8 @@
 #   bash scripts/bench-mitsuba.sh [REPEATS] [SPP]      defaults: 3 repetitions, 256 spp, 2 threads
 #
 # Each repetition is one `twinray compare SCENE --peer mitsuba --spp SPP --batches 2 --threads 2`: twinray
-# (bvh backend, its default sampler) and then Mitsuba (llvm_ad_rgb when it works, else scalar_rgb; the
-# variant is printed) render the same exported scene. relMSE is the noise-based estimate of each render
+# (the default backend, bvh8, and the default sampler) and then Mitsuba (llvm_ad_rgb when it works, else
+# scalar_rgb; the variant is printed) render the same exported scene. relMSE is the noise-based estimate of each render
 # (harness/compare/image_comparison.h: the variance of the mean from the two independent batches over
 # (mean^2 + 0.01), averaged over pixels and channels), which needs no reference and carries no reference
 # noise; it equals the relMSE against the truth when the verdict is "agree" (no bias). For the Cornell box
