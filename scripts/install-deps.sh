@@ -16,6 +16,7 @@ PACKAGES=(
   nlohmann-json3-dev     # scene format
   libcli11-dev           # command line
   libfmt-dev
+  libpugixml-dev         # XML: Mitsuba 3 scenes (twinray export, .xml scenes)
 )
 
 missing=()
