@@ -167,6 +167,8 @@ WorkerProcess::WorkerProcess(const std::filesystem::path& executable, const std:
     waitpid(pid_, nullptr, 0);
     throw system_failure("pidfd_open (Linux 5.3 or later is needed)", e);
   }
+  // Non-blocking: output() reads what is there without waiting for more.
+  fcntl(output_read.fd, F_SETFL, fcntl(output_read.fd, F_GETFL) | O_NONBLOCK);
   output_fd_ = output_read.release();
   lifeline_fd_ = lifeline_write.release();
   monitor_ = std::thread([this] { monitor(); });
@@ -209,30 +211,39 @@ std::optional<WorkerTermination> WorkerProcess::termination() const {
 }
 
 std::string WorkerProcess::output() const {
+  drain_available();
   std::lock_guard lock(mutex_);
   return output_->text();
 }
 
-void WorkerProcess::monitor() {
+bool WorkerProcess::drain_available() const {
+  std::lock_guard read_lock(read_mutex_);
   char buffer[64 * 1024];
-  bool output_open = true;
-  const auto drain_once = [&] {
+  while (output_open_) {
     const ssize_t n = read(output_fd_, buffer, sizeof buffer);
     if (n > 0) {
       std::lock_guard lock(mutex_);
       output_->append(std::string_view(buffer, static_cast<std::size_t>(n)));
-    } else if (n == 0 || (errno != EINTR && errno != EAGAIN)) {
-      output_open = false;
+    } else if (n < 0 && errno == EINTR) {
+      continue;
+    } else if (n < 0 && errno == EAGAIN) {
+      break;
+    } else {
+      output_open_ = false;  // end of file (or an error, which means the same here)
     }
-  };
+  }
+  return output_open_;
+}
 
+void WorkerProcess::monitor() {
+  bool output_open = true;
   for (;;) {
     pollfd fds[2] = {{pidfd_, POLLIN, 0}, {output_fd_, POLLIN, 0}};
     if (poll(fds, output_open ? 2 : 1, -1) < 0) {
       if (errno == EINTR) continue;
       break;  // cannot happen with valid descriptors; reap below rather than spin
     }
-    if (output_open && (fds[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) drain_once();
+    if (output_open && (fds[1].revents & (POLLIN | POLLHUP | POLLERR)) != 0) output_open = drain_available();
     if ((fds[0].revents & (POLLIN | POLLHUP | POLLERR)) != 0) break;
   }
 
@@ -254,7 +265,7 @@ void WorkerProcess::monitor() {
     const int ready = poll(&fd, 1, static_cast<int>(left.count()));
     if (ready < 0 && errno == EINTR) continue;
     if (ready <= 0) break;
-    drain_once();
+    output_open = drain_available();
   }
 
   {

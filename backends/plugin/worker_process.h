@@ -58,10 +58,15 @@ class WorkerProcess {
   // Waits until the worker has ended and the monitor has reaped it and drained its output.
   bool wait_for_exit(std::chrono::steady_clock::duration timeout);
   std::optional<WorkerTermination> termination() const;
+  // Everything the worker has printed so far: what is waiting in the pipe is read first, so output printed
+  // before the worker answered a call is always included.
   std::string output() const;
 
  private:
   void monitor();
+  // Reads what the pipe holds now, without blocking; false at end of file. Both the monitor and output() call
+  // it; read_mutex_ keeps their reads in order.
+  bool drain_available() const;
 
   pid_t pid_ = -1;
   int pidfd_ = -1;
@@ -69,6 +74,8 @@ class WorkerProcess {
   int lifeline_fd_ = -1;  // write end of the lifeline pipe
   std::function<void(const WorkerTermination&)> on_exit_;
 
+  mutable std::mutex read_mutex_;
+  mutable bool output_open_ = true;
   mutable std::mutex mutex_;
   std::condition_variable ended_;
   std::unique_ptr<OutputCapture> output_;

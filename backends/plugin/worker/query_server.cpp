@@ -88,7 +88,9 @@ void QueryServer::serve(std::size_t index) {
   set_thread_role(static_cast<std::int32_t>(index));
   install_alternate_signal_stack();
   Channel& c = block_.channels[index];
-  std::uint32_t seen = c.request.load(std::memory_order_acquire);
+  // Requests are numbered from 1. Starting from 0 rather than from the word's current value matters: twinray
+  // may post the first request before this thread has started.
+  std::uint32_t seen = 0;
   for (;;) {
     seen = wait_for_request(c, seen);
     c.status = Status::Ok;

@@ -24,11 +24,13 @@
 #include "backends/plugin/worker_protocol.h"
 #include "core/util/input_error.h"
 
+#include <malloc.h>
 #include <poll.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <climits>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -83,6 +85,16 @@ int main(int argc, char** argv) {
   pw::Header& header = block.header;
   if (header.magic != pw::kMagic || header.version != pw::kProtocolVersion)
     setup_failed(header, "twinray and twinray-plugin-worker come from different builds (protocol mismatch)");
+
+  // glibc's malloc reads /proc/sys/vm/overcommit_memory the first time it shrinks a thread's heap, which would
+  // be a forbidden open once the querying filter is in place (a plugin freeing memory in a query would be
+  // stopped as a sandbox violation). Heaps of threads never shrink below this trim threshold: 2 GiB, more than
+  // one such heap can hold (64 MiB). Memory a plugin frees stays with the worker, which ends with the instance.
+  mallopt(M_TRIM_THRESHOLD, INT_MAX);
+  // Every malloc arena reserves 64 MiB of address space, which counts against RLIMIT_AS whether used or not;
+  // glibc would make up to eight per core as threads first allocate. Four bound the reservation at 256 MiB
+  // and still let four threads allocate without contention (queries should not allocate at all).
+  mallopt(M_ARENA_MAX, 4);
 
   pw::install_crash_recorder(header.crash);
   pw::set_thread_role(pw::kMainThread);
