@@ -33,11 +33,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// How long a caller spins on the answer before it sleeps in the kernel. A single ray through a simple plugin
-// comes back in about a microsecond when the worker thread is awake, and a futex sleep and wake-up costs ten
-// or more; beyond a few tens of microseconds spinning only takes a core from the worker (on a machine with
-// fewer cores than busy threads, the very worker we wait for).
-constexpr auto kCallerSpin = std::chrono::microseconds(20);
+// How long a caller waits for the answer (yielding, futex.h) before it sleeps in the kernel. A single ray
+// through a simple plugin comes back in one to a few microseconds while the worker thread is awake; a futex
+// sleep and wake-up costs ten or more. Longer calls are not worth the system calls of yielding.
+constexpr auto kCallerSpin = std::chrono::microseconds(50);
 // How long twinray waits for a worker it has killed to be reaped (its output drained) before reporting.
 constexpr auto kReapWait = std::chrono::seconds(5);
 // Added to every handshake word when the worker dies, so a caller about to sleep on it does not (see
@@ -357,11 +356,7 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
                                                   std::chrono::duration<double> per_call) {
   pw::Channel& c = lease.channel();
   const auto started = Clock::now();
-  for (unsigned spins = 1;; ++spins) {
-    if (c.response.load(std::memory_order_acquire) == sequence) return;
-    if (spins % 64 == 0 && Clock::now() - started >= kCallerSpin) break;
-    pw::cpu_relax();
-  }
+  if (pw::spin_yielding([&] { return c.response.load(std::memory_order_acquire) == sequence; }, kCallerSpin)) return;
   // The per-call limit runs from the moment the worker starts a ray: a batch may take long in all, as long as
   // every single ray is quick. `current` is the worker's index of the ray in flight.
   auto progress_at = started;

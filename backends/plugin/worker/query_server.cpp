@@ -19,11 +19,9 @@ namespace twinray::plugin_worker {
 
 namespace {
 
-// How long a query thread spins for the next request before it sleeps: twinray's renderer sends the next
-// ray of a pixel within a microsecond or two, and catching it awake saves both sides a futex wake-up. Kept
-// short because a spinning worker thread takes a core from the renderer when there are fewer cores than
-// threads.
-constexpr auto kWorkerSpin = std::chrono::microseconds(20);
+// How long a query thread waits for the next request (yielding, futex.h) before it sleeps: twinray's renderer
+// sends its next ray within microseconds, and catching it awake saves both sides a futex wake-up.
+constexpr auto kWorkerSpin = std::chrono::microseconds(50);
 
 void copy_message(char* destination, std::size_t capacity, const char* text) {
   const std::size_t n = strnlen(text, capacity - 1);
@@ -68,13 +66,8 @@ void QueryServer::start_threads() {
 }
 
 std::uint32_t QueryServer::wait_for_request(Channel& c, std::uint32_t seen) {
-  const auto started = std::chrono::steady_clock::now();
-  for (unsigned spins = 1;; ++spins) {
-    const std::uint32_t now = c.request.load(std::memory_order_acquire);
-    if (now != seen) return now;
-    if (spins % 64 == 0 && std::chrono::steady_clock::now() - started >= kWorkerSpin) break;
-    cpu_relax();
-  }
+  if (spin_yielding([&] { return c.request.load(std::memory_order_acquire) != seen; }, kWorkerSpin))
+    return c.request.load(std::memory_order_acquire);
   // seq_cst store, then seq_cst load: paired with twinray's store of request and load of worker_sleeping
   // (isolated_plugin_backend.cpp), one side always sees the other.
   c.worker_sleeping.store(1, std::memory_order_seq_cst);
