@@ -16,6 +16,7 @@ PACKAGES=(
   nlohmann-json3-dev     # scene format
   libcli11-dev           # command line
   libfmt-dev
+  libseccomp-dev         # the plugin worker's system-call sandbox (backends/plugin/worker)
 )
 
 missing=()
