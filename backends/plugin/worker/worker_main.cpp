@@ -127,7 +127,11 @@ int main(int argc, char** argv) {
   pw::QueryServer server(block, pw::kControlFd, [seccomp_active] {
     return seccomp_active ? pw::install_seccomp_filter(pw::FilterPhase::Querying) : std::string();
   });
-  server.start_threads();
+  try {
+    server.start_threads();
+  } catch (const std::exception& e) {  // std::system_error: no memory for 16 stacks under a tiny limit
+    setup_failed(header, std::string("cannot start the query threads (is the memory limit too low?): ") + e.what());
+  }
 
   std::unique_ptr<twinray::PluginLibrary> plugin;
   header.loading.store(1);
