@@ -1,7 +1,7 @@
 #pragma once
 // The benchmark bodies bench_main.cpp registers, one call per (scene, backend, ...) case.
 //
-// Benchmark names (parsed by `twinray report`, cli/report/bench_results.h):
+// Benchmark names (parsed by `twinray report`, harness/report/bench_results.h):
 //   build/SCENE/BACKEND[/manual_time]
 //   trace/SCENE/BACKEND/KIND/QUERY/threads:N[/real_time]
 // Counters are documented in docs/benchmarks.md.

@@ -2,9 +2,9 @@
 
 #include "backends/registry.h"
 #include "cli/commands.h"
-#include "cli/converge/converge_output.h"
-#include "cli/converge/convergence_study.h"
-#include "cli/converge/reference_cache.h"
+#include "harness/converge/converge_output.h"
+#include "harness/converge/convergence_study.h"
+#include "harness/converge/reference_cache.h"
 #include "core/image/image_io.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/atomic_file.h"
@@ -27,7 +27,7 @@ struct ConvergeCommandOptions {
   std::string scene;
   std::string reference;
   std::optional<int> reference_spp;
-  std::string backends = "bvh,embree";
+  std::string backends = "bvh8,embree";
   std::string strategies = "mis,bsdf,light";
   double budget_seconds = 10.0;
   std::string out;

@@ -2,7 +2,7 @@
 // Markdown twin. Contract in docs/cli.md.
 
 #include "cli/commands.h"
-#include "cli/report/report_writer.h"
+#include "harness/report/report_writer.h"
 
 #include <fmt/core.h>
 

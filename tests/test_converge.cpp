@@ -1,8 +1,8 @@
 // twinray converge: the error metrics and slope fit exactly, and the command end to end on a tiny scene.
 
-#include "cli/converge/error_metrics.h"
-#include "cli/converge/reference_cache.h"
-#include "cli/converge/slope_fit.h"
+#include "harness/converge/error_metrics.h"
+#include "harness/converge/reference_cache.h"
+#include "harness/converge/slope_fit.h"
 #include "cli_runner.h"
 #include "core/scene/scene_loader.h"
 

@@ -1,6 +1,6 @@
 // The crosscheck classifier: identical hits, edge ambiguities, ties and genuine mismatches.
 
-#include "cli/crosscheck/hit_comparison.h"
+#include "harness/crosscheck/hit_comparison.h"
 
 #include <gtest/gtest.h>
 

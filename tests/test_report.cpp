@@ -2,9 +2,9 @@
 // a small benchmark fixture (HTML and Markdown referencing image files that exist).
 
 #include "backends/registry.h"
-#include "cli/report/bench_results.h"
-#include "cli/report/cost_heatmap.h"
-#include "cli/report/scaling.h"
+#include "harness/report/bench_results.h"
+#include "harness/report/cost_heatmap.h"
+#include "harness/report/scaling.h"
 #include "cli_runner.h"
 #include "core/scene/procedural_bench.h"
 #include "core/util/input_error.h"

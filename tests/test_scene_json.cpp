@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <numbers>
+#include <optional>
 #include <string>
 
 namespace twinray {
@@ -298,6 +299,54 @@ TEST(BundledScenes, SpheresSceneHasEveryMaterialKind) {
   for (std::uint32_t id = 0; id < scene.shapes.size(); ++id) seen[static_cast<int>(scene.material_of(id).type)] = true;
   EXPECT_TRUE(seen[0] && seen[1] && seen[2] && seen[3]);
   EXPECT_EQ(scene.environment.type, EnvironmentType::Constant);
+}
+
+// Scenes name files of the shared data folder as $TWINRAY_SHARED/...: the variable wins when set, otherwise a
+// folder named `shared` beside an ancestor of the scene's folder is found, and without either the scene is
+// rejected at the place that names the file.
+class SharedDataPaths : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (const char* old = std::getenv("TWINRAY_SHARED")) saved_ = old;
+    ::unsetenv("TWINRAY_SHARED");
+  }
+  void TearDown() override {
+    if (saved_) ::setenv("TWINRAY_SHARED", saved_->c_str(), 1);
+    else ::unsetenv("TWINRAY_SHARED");
+  }
+  static constexpr const char* kTriangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  static constexpr const char* kScene = R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov": 40, "width": 8, "height": 8},
+    "materials": {"m": {"type": "diffuse", "albedo": 0.5}},
+    "shapes": [{"type": "mesh", "file": "${TWINRAY_SHARED}/data/meshes/tri.obj", "material": "m"}]})";
+  std::optional<std::string> saved_;
+};
+
+TEST_F(SharedDataPaths, TheVariableNamesTheFolder) {
+  testing::TempFolder dir;
+  dir.write("elsewhere/data/meshes/tri.obj", kTriangle);
+  const std::filesystem::path scene_file = dir.write("repo/scenes/s.json", kScene);
+  ::setenv("TWINRAY_SHARED", (dir.path() / "elsewhere").c_str(), 1);
+  EXPECT_EQ(load_scene(scene_file).geometry.triangle_count(), 1u);
+}
+
+TEST_F(SharedDataPaths, ASharedFolderBesideTheRepositoryIsFound) {
+  testing::TempFolder dir;
+  dir.write("shared/data/meshes/tri.obj", kTriangle);
+  const std::filesystem::path scene_file = dir.write("repo/scenes/s.json", kScene);
+  EXPECT_EQ(load_scene(scene_file).geometry.triangle_count(), 1u);
+}
+
+TEST_F(SharedDataPaths, WithoutOneTheSceneIsRejectedAtThePlace) {
+  testing::TempFolder dir;
+  const std::filesystem::path scene_file = dir.write("repo/scenes/s.json", kScene);
+  try {
+    (void)load_scene(scene_file);
+    FAIL() << "a scene naming a missing shared folder must be rejected";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("/shapes/0/file"), std::string::npos) << what;
+    EXPECT_NE(what.find("TWINRAY_SHARED"), std::string::npos) << what;
+  }
 }
 
 // The shared third-party meshes: triangle counts from /work/shared/data/README.md. Degenerate triangles are

@@ -2,8 +2,8 @@
 // claim to handle it (bvh, brute, embree), plus the helpers the cases rely on, plus the command's contract
 // through the real binary.
 
-#include "cli/stress/stress_case.h"
-#include "cli/stress/stress_support.h"
+#include "harness/stress/stress_case.h"
+#include "harness/stress/stress_support.h"
 #include "cli_runner.h"
 #include "core/scene/procedural.h"
 #include "core/util/fp_mode.h"
@@ -37,7 +37,7 @@ std::ostream& operator<<(std::ostream& os, const Param& p) { return os << p.case
 std::vector<Param> params() {
   std::vector<Param> out;
   for (const StressCase& c : all_cases())
-    for (const char* b : {"bvh", "brute", "embree"})
+    for (const char* b : {"bvh8", "bvh", "brute", "embree"})
       if (!kOpenFindings.count({c.name, b})) out.push_back({c.name, b});
   return out;
 }

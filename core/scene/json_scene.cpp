@@ -4,6 +4,7 @@
 #include "core/scene/input_file.h"
 #include "core/scene/json_reader.h"
 #include "core/scene/mesh_file.h"
+#include "core/scene/shared_data.h"
 #include "core/scene/transform.h"
 #include "core/util/input_error.h"
 
@@ -179,7 +180,7 @@ class SceneParser {
       node.expect_object({"type", "file", "material", "name", "transform"});
       shape.kind = ShapeKind::Mesh;
       const JsonNode file = node.member("file");
-      shape.file = resolve_relative(base_dir_, file.as_string());
+      shape.file = resolve_file(file);
       TriangleMesh mesh = read_referenced_mesh(shape.file, file);
       finish_mesh(node, geom_id, std::move(mesh));
     } else if (type_name == "triangles") {
@@ -283,7 +284,7 @@ class SceneParser {
       node.expect_object({"type", "file", "rotation", "scale"});
       env.type = EnvironmentType::Image;
       const JsonNode file = node.member("file");
-      env.image = resolve_relative(base_dir_, file.as_string());
+      env.image = resolve_file(file);
       try {
         require_regular_file(env.image);
       } catch (const InputError& e) {
@@ -310,6 +311,21 @@ class SceneParser {
       if (r.max_depth == 0) depth->fail("max_depth must be -1 (unlimited) or at least 1, got 0");
     }
     if (const auto seed = node.optional_member("seed")) r.seed = seed->as_unsigned();
+  }
+
+  // A file a scene names: relative to the scene's folder, absolute as it is, or in the shared data folder
+  // when it starts with $TWINRAY_SHARED/ (core/scene/shared_data.h).
+  std::filesystem::path resolve_file(const JsonNode& node) const {
+    const std::string text = node.as_string();
+    for (const std::string_view prefix : kSharedDataPrefixes) {
+      if (!text.starts_with(prefix)) continue;
+      const std::optional<std::filesystem::path> shared = find_shared_data(base_dir_);
+      if (!shared)
+        node.fail("'" + text + "' is in the shared data folder, which was not found: set TWINRAY_SHARED to it "
+                  "(the folder with data/meshes), or place it as 'shared' beside the repository");
+      return *shared / text.substr(prefix.size());
+    }
+    return resolve_relative(base_dir_, text);
   }
 
   const std::filesystem::path& file_;

@@ -1,0 +1,192 @@
+// Closest-hit and any-hit traversal of the flat BVH.
+//
+// Ordered depth-first traversal: at an interior node both children's boxes are tested, the nearer child is
+// visited first and the farther one pushed with its entry distance; popped entries that start beyond the
+// current closest hit are skipped without touching their node. The interval [tmin, best t] shrinks as hits
+// are found and stays closed, so an equidistant hit in another subtree still reaches `precedes` and the
+// winner does not depend on the visiting order: the result is bit-identical to the brute-force loop.
+//
+// The traversal is a template on the primitive kinds present, so a triangle-only scene runs a loop that
+// contains no sphere code at all (and vice versa); a mixed scene branches once per leaf.
+//
+// No include guard: bvh_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
+// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
+// child-pair box test of ray_box.h) defined. See bvh_kernels.h.
+
+namespace bvh_detail {
+
+struct StackEntry {
+  std::uint32_t node;
+  float entry;  // where the ray enters the node's box
+};
+
+// The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
+TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
+  return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
+}
+
+// Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
+TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
+  while (size > 0) {
+    const StackEntry& e = stack[--size];
+    if (e.entry <= tmax) {
+      node = e.node;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
+TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
+                    float tmax, StackEntry* stack, std::size_t& size, std::uint32_t& next) {
+  const std::uint32_t left = index + 1;
+  const std::uint32_t right = nodes[index].second_child();
+  float entry_left = 0.0f, entry_right = 0.0f;
+  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
+  const bool hit_left = (hits & 1u) != 0, hit_right = (hits & 2u) != 0;
+  if (hit_left && hit_right) {
+    const bool left_first = entry_left <= entry_right;
+    stack[size++] = left_first ? StackEntry{right, entry_right} : StackEntry{left, entry_left};
+    next = left_first ? left : right;
+  } else if (hit_left || hit_right) {
+    next = hit_left ? left : right;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace bvh_detail
+
+// Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  using namespace bvh_detail;
+  hit = Hit{};
+  if (bvh.nodes.empty()) return false;
+  const BoxRay box_ray(ray);
+  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  StackEntry stack[kBvhMaxDepth];
+  std::size_t size = 0;
+  std::uint64_t nodes_visited = 1, prims_tested = 0;
+  float tmax = ray.tmax;          // shrinks to the best hit's t
+  bool best_is_sphere = false;
+  std::uint32_t best_index = 0;   // into the store's array of the best hit's kind
+
+  float root_entry = 0.0f;
+  std::uint32_t index = 0;
+  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
+  while (more) {
+    const BvhNode& node = bvh.nodes[index];
+    if (!node.is_leaf()) {
+      nodes_visited += 2;
+      more = descend(bvh.nodes, index, box_ray, ray.tmin, tmax, stack, size, index) ||
+             pop_next(stack, size, tmax, index);
+      continue;
+    }
+    const std::uint32_t first = node.first_prim(), count = node.prim_count();
+    prims_tested += count;
+    if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
+      for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
+        BlockHits found;
+        unsigned hits = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
+                                                 ray.tmin, tmax, found);
+        for (; hits != 0; hits &= hits - 1) {
+          const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
+          const PrimitiveKey key = prims.triangle_keys[slot + lane];
+          if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
+          hit.t = tmax = found.t[lane];
+          hit.u = found.u[lane];
+          hit.v = found.v[lane];
+          hit.geom_id = key.geom_id;
+          hit.prim_id = key.prim_id;
+          best_is_sphere = false;
+          best_index = slot + lane;
+        }
+      }
+    } else if constexpr (kSpheres) {
+      for (std::uint32_t i = first; i < first + count; ++i) {
+        const StoredSphere& s = prims.spheres[i];
+        float t;
+        if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
+        const PrimitiveKey key = prims.sphere_keys[i];
+        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
+        hit.t = tmax = t;
+        hit.geom_id = key.geom_id;
+        hit.prim_id = key.prim_id;
+        best_is_sphere = true;
+        best_index = i;
+      }
+    }
+    more = pop_next(stack, size, tmax, index);
+  }
+
+  if (stats) {
+    stats->nodes_visited += nodes_visited;
+    stats->primitives_tested += prims_tested;
+  }
+  if (!hit.found()) return false;
+  if (kSpheres && best_is_sphere) {
+    const StoredSphere& s = prims.spheres[best_index];
+    sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
+  } else if constexpr (kTriangles) {
+    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
+                                       prims.triangle_vertex(best_index, 2));
+  }
+  return true;
+}
+
+// Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  using namespace bvh_detail;
+  if (bvh.nodes.empty()) return false;
+  const BoxRay box_ray(ray);
+  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  StackEntry stack[kBvhMaxDepth];
+  std::size_t size = 0;
+  std::uint64_t nodes_visited = 1, prims_tested = 0;
+  bool found = false;
+
+  float root_entry = 0.0f;
+  std::uint32_t index = 0;
+  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
+  while (more && !found) {
+    const BvhNode& node = bvh.nodes[index];
+    if (!node.is_leaf()) {
+      nodes_visited += 2;
+      more = descend(bvh.nodes, index, box_ray, ray.tmin, ray.tmax, stack, size, index) ||
+             pop_next(stack, size, ray.tmax, index);
+      continue;
+    }
+    const std::uint32_t first = node.first_prim(), count = node.prim_count();
+    if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
+      for (std::uint32_t slot = first; slot < first + count && !found; slot += kTriangleBlockLanes) {
+        const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
+        prims_tested += in_block;
+        BlockHits unused;
+        found = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
+                                         unused) != 0;
+      }
+    } else if constexpr (kSpheres) {
+      for (std::uint32_t i = first; i < first + count && !found; ++i) {
+        ++prims_tested;
+        const StoredSphere& s = prims.spheres[i];
+        float t;
+        found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
+      }
+    }
+    more = pop_next(stack, size, ray.tmax, index);
+  }
+
+  if (stats) {
+    stats->nodes_visited += nodes_visited;
+    stats->primitives_tested += prims_tested;
+  }
+  return found;
+}

@@ -1,0 +1,195 @@
+#include "harness/crosscheck/crosscheck_run.h"
+
+#include "backends/registry.h"
+#include "harness/crosscheck/hit_comparison.h"
+#include "harness/crosscheck/ray_generation.h"
+#include "core/scene/scene_loader.h"
+#include "core/util/fp_mode.h"
+#include "core/util/progress.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <span>
+#include <stdexcept>
+
+namespace twinray::crosscheck {
+
+namespace {
+
+struct BackendRun {
+  double seconds_closest = 0.0;
+  double seconds_any = 0.0;
+  std::size_t hits = 0;
+  std::size_t any_closest_disagreements = 0;  // occluded() != intersect().found() within one backend
+  std::vector<Hit> closest;
+  std::vector<std::uint8_t> occluded;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+BackendRun trace(const Backend& backend, const std::vector<Ray>& rays) {
+  BackendRun run;
+  run.closest.resize(rays.size());
+  run.occluded.resize(rays.size());
+  // Timed on the calling thread only: per-thread throughput is what the ratios compare.
+  auto start = std::chrono::steady_clock::now();
+  backend.intersect(std::span<const Ray>(rays), std::span<Hit>(run.closest));
+  run.seconds_closest = seconds_since(start);
+  start = std::chrono::steady_clock::now();
+  backend.occluded(std::span<const Ray>(rays), std::span<std::uint8_t>(run.occluded));
+  run.seconds_any = seconds_since(start);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    run.hits += run.closest[i].found() ? 1 : 0;
+    run.any_closest_disagreements += (run.occluded[i] != 0) != run.closest[i].found() ? 1 : 0;
+  }
+  return run;
+}
+
+double rate(std::size_t n, double seconds) { return seconds > 0.0 ? static_cast<double>(n) / seconds : 0.0; }
+
+std::string describe_hit(const Hit& h) {
+  if (!h.found()) return "miss";
+  return fmt::format("geom {} prim {} t={:.9g} uv=({:.6g},{:.6g})", h.geom_id, h.prim_id, h.t, h.u, h.v);
+}
+
+}  // namespace
+
+CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
+  const std::vector<std::string>& names = settings.backends;
+  if (names.size() < 2) throw std::invalid_argument("--backends needs at least two backends to compare");
+
+  const ScopedFlushDenormals ftz;
+  const Scene scene = load_scene(settings.scene);
+  const GeometryIndex index(scene.geometry);
+
+  fmt::print("scene {}: {} triangles, {} spheres ({} degenerate triangles skipped)\n", scene.source.string(),
+             scene.geometry.triangle_count(), scene.geometry.sphere_count(), scene.report.degenerate_triangles);
+
+  std::vector<std::unique_ptr<Backend>> backends;
+  nlohmann::json j_build = nlohmann::json::object();
+  for (const std::string& name : names) {
+    backends.push_back(make_backend(name));
+    backends.back()->build(scene.geometry);
+    const BuildStats bs = backends.back()->build_stats();
+    fmt::print("built {:<12} in {:8.3f} s, {:8.2f} MiB\n", name, bs.build_seconds,
+               static_cast<double>(bs.memory_bytes) / (1024.0 * 1024.0));
+    std::fflush(stdout);
+    j_build[name] = {{"build_seconds", bs.build_seconds}, {"memory_bytes", bs.memory_bytes}};
+  }
+
+  // Rays that start on surfaces (diffuse, shadow) are built from first hits. They come from a built-in backend,
+  // so a plugin under test never shapes the rays it is judged on.
+  const Backend* hit_source = nullptr;
+  std::unique_ptr<Backend> own_hit_source;
+  const std::vector<std::string> builtin = backend_names();
+  for (std::size_t k = 0; k < names.size() && hit_source == nullptr; ++k)
+    if (std::find(builtin.begin(), builtin.end(), names[k]) != builtin.end()) hit_source = backends[k].get();
+  if (hit_source == nullptr) {
+    own_hit_source = make_backend("embree");
+    own_hit_source->build(scene.geometry);
+    hit_source = own_hit_source.get();
+  }
+
+  Progress progress("crosscheck", settings.kinds.size() * backends.size());
+  std::size_t total_rays = 0, total_identical = 0, total_genuine = 0;
+  std::vector<double> closest_seconds(backends.size(), 0.0);
+  std::vector<std::size_t> closest_rays(backends.size(), 0);
+  nlohmann::json j_kinds = nlohmann::json::object();
+  std::string report;
+
+  for (const RayKind kind : settings.kinds) {
+    const std::vector<Ray> rays = generate_rays(kind, scene, *hit_source, settings.rays_per_kind, settings.seed);
+    std::vector<BackendRun> runs;
+    for (std::size_t k = 0; k < backends.size(); ++k) {
+      runs.push_back(trace(*backends[k], rays));
+      closest_seconds[k] += runs.back().seconds_closest;
+      closest_rays[k] += rays.size();
+      progress.advance();
+    }
+
+    report += fmt::format("\n{} rays: {}\n", to_string(kind), rays.size());
+    report += fmt::format("  {:<14} {:>10} {:>12} {:>12} {:>14}\n", "backend", "hits", "closest Mr/s", "any Mr/s",
+                          "any!=closest");
+    nlohmann::json j_kind = {{"rays", rays.size()}};
+    for (std::size_t k = 0; k < backends.size(); ++k) {
+      const BackendRun& r = runs[k];
+      report += fmt::format("  {:<14} {:>10} {:>12.3f} {:>12.3f} {:>14}\n", names[k], r.hits,
+                            rate(rays.size(), r.seconds_closest) * 1e-6, rate(rays.size(), r.seconds_any) * 1e-6,
+                            r.any_closest_disagreements);
+      total_genuine += r.any_closest_disagreements;
+      j_kind["backends"][names[k]] = {{"hits", r.hits},
+                                      {"closest_rays_per_second", rate(rays.size(), r.seconds_closest)},
+                                      {"any_rays_per_second", rate(rays.size(), r.seconds_any)},
+                                      {"any_closest_disagreements", r.any_closest_disagreements}};
+    }
+    report += fmt::format("  {:<14} {:>20} {:>7} {:>7} {:>8} {:>12} {:>22}\n", fmt::format("vs {}", names[0]),
+                          "identical", "edge", "tie", "genuine", "max rel dt", "any-hit edge/genuine");
+    j_kind["comparisons"] = nlohmann::json::array();
+    for (std::size_t k = 1; k < backends.size(); ++k) {
+      const PairComparison c = compare(index, rays, runs[0].closest, runs[k].closest, runs[0].occluded, runs[k].occluded);
+      report += fmt::format("  {:<14} {:>10} ({:7.3f}%) {:>7} {:>7} {:>8} {:>12.3g} {:>22}\n", names[k], c.identical,
+                            100.0 * c.identical_fraction(), c.edge, c.tie, c.genuine, c.max_rel_t_diff,
+                            fmt::format("{}/{}", c.occlusion_edge, c.occlusion_genuine));
+      for (const Mismatch& m : c.examples) {
+        const Ray& ray = rays[m.ray_index];
+        report += fmt::format("    genuine {} mismatch, ray {}: org ({:.9g}, {:.9g}, {:.9g}) dir ({:.9g}, {:.9g}, {:.9g}) "
+                              "t [{:.9g}, {:.9g}]\n      {}: {}{}\n      {}: {}{}\n",
+                              m.occlusion ? "any-hit" : "closest-hit", m.ray_index, ray.org.x, ray.org.y, ray.org.z,
+                              ray.dir.x, ray.dir.y, ray.dir.z, ray.tmin, ray.tmax, names[0], describe_hit(m.a),
+                              m.occlusion ? (m.occluded_a ? " (occluded)" : " (not occluded)") : "", names[k],
+                              describe_hit(m.b), m.occlusion ? (m.occluded_b ? " (occluded)" : " (not occluded)") : "");
+      }
+      total_rays += c.rays;
+      total_identical += c.identical;
+      total_genuine += c.genuine + c.occlusion_genuine;
+      j_kind["comparisons"].push_back({{"backend", names[k]},
+                                       {"against", names[0]},
+                                       {"rays", c.rays},
+                                       {"identical", c.identical},
+                                       {"identical_fraction", c.identical_fraction()},
+                                       {"mismatches", {{"edge", c.edge}, {"tie", c.tie}, {"genuine", c.genuine}}},
+                                       {"occlusion", {{"agree", c.occlusion_agree},
+                                                      {"edge", c.occlusion_edge},
+                                                      {"genuine", c.occlusion_genuine}}},
+                                       {"max_rel_t_diff", c.max_rel_t_diff}});
+    }
+    j_kinds[std::string(to_string(kind))] = j_kind;
+  }
+  progress.finish();
+
+  const double identical_fraction =
+      total_rays ? static_cast<double>(total_identical) / static_cast<double>(total_rays) : 1.0;
+  report += "\nclosest-hit rays per second on one thread:";
+  nlohmann::json j_rates = nlohmann::json::object();
+  for (std::size_t k = 0; k < backends.size(); ++k) {
+    const double r = rate(closest_rays[k], closest_seconds[k]);
+    report += fmt::format("  {} {:.3f} M", names[k], r * 1e-6);
+    j_rates[names[k]] = r;
+  }
+  report += fmt::format("\nverdict: {} ({} genuine mismatches, {:.4f}% identical)\n", total_genuine == 0 ? "PASS" : "FAIL",
+                        total_genuine, 100.0 * identical_fraction);
+
+  CrosscheckReport out;
+  out.text = std::move(report);
+  out.genuine_mismatches = total_genuine;
+  out.json = {{"scene", scene.source.string()},
+              {"seed", settings.seed},
+              {"rays_per_kind", settings.rays_per_kind},
+              {"backends", names},
+              {"baseline", names[0]},
+              {"build", j_build},
+              {"kinds", j_kinds},
+              {"rays_per_second", j_rates},
+              {"genuine_mismatches", total_genuine},
+              {"identical_fraction", identical_fraction},
+              {"tolerances", {{"rel_t", kRelT}, {"abs_world", kAbsWorld}, {"grazing_cos", kGrazingCos}}},
+              {"verdict", total_genuine == 0 ? "pass" : "fail"}};
+  return out;
+}
+
+}  // namespace twinray::crosscheck
