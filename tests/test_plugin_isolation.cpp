@@ -504,7 +504,19 @@ std::size_t open_descriptors() {
   return n;
 }
 
-// Workers that end well or badly leave no descriptor (memfd, pipes, pidfd) and no thread behind.
+// Children of this process that still exist (running or not yet reaped), from /proc.
+std::size_t child_processes() {
+  std::size_t n = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream children(task.path() / "children");
+    std::string pid;
+    while (children >> pid) ++n;
+  }
+  return n;
+}
+
+// Workers that end well or badly leave no descriptor (memfd, pipes, pidfd) and no process (not even a zombie)
+// behind.
 TEST(PluginIsolation, InstancesLeaveNoDescriptorsBehind) {
   const SceneGeometry g = isolation_scene();
   { const auto warm_up = make_isolated_plugin_backend(kIsoBrute, quick_limits()); }
@@ -517,6 +529,7 @@ TEST(PluginIsolation, InstancesLeaveNoDescriptorsBehind) {
     EXPECT_THROW(bad->occluded(rays_with_trigger(1, 0)[0]), PluginFailure);
   }
   EXPECT_EQ(open_descriptors(), before);
+  EXPECT_EQ(child_processes(), 0u);
 }
 
 }  // namespace
