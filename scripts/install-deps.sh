@@ -17,6 +17,7 @@ PACKAGES=(
   libcli11-dev           # command line
   libfmt-dev
   libpugixml-dev         # XML: Mitsuba 3 scenes (twinray export, .xml scenes)
+  libseccomp-dev         # the plugin worker's system-call sandbox (backends/plugin/worker)
 )
 
 missing=()
