@@ -3,6 +3,7 @@
 #include "backends/brute/brute_backend.h"
 #include "backends/bvh/bvh_backend.h"
 #include "backends/embree/embree_backend.h"
+#include "backends/exact/exact_backend.h"
 #include "backends/plugin/plugin_backend.h"
 
 #include <fmt/core.h>
@@ -17,13 +18,14 @@ namespace {
 constexpr std::string_view kPluginPrefix = "plugin:";
 }
 
-std::vector<std::string> backend_names() { return {"bvh", "embree", "embree-fast", "brute"}; }
+std::vector<std::string> backend_names() { return {"bvh", "embree", "embree-fast", "brute", "exact"}; }
 
 std::unique_ptr<Backend> make_backend(std::string_view name) {
   if (name == "bvh") return make_bvh_backend();
   if (name == "embree") return make_embree_backend(/*robust=*/true);
   if (name == "embree-fast") return make_embree_backend(/*robust=*/false);
   if (name == "brute") return make_brute_backend();
+  if (name == "exact") return make_exact_backend();
   if (name.starts_with(kPluginPrefix)) return load_plugin_backend(std::string(name.substr(kPluginPrefix.size())));
   throw std::invalid_argument(
       fmt::format("unknown backend '{}' (choose from {}, or plugin:PATH)", name, fmt::join(backend_names(), ", ")));

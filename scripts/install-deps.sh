@@ -16,6 +16,8 @@ PACKAGES=(
   nlohmann-json3-dev     # scene format
   libcli11-dev           # command line
   libfmt-dev
+  libgmp-dev             # exact rational arithmetic (GMP, gmpxx): the exact backend and the arbiter
+  libmpfr-dev            # correctly rounded conversion of exact values to float (MPFR)
 )
 
 missing=()

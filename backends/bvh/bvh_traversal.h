@@ -110,15 +110,14 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
       for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
         BlockHits found;
-        unsigned hits = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
-                                                 ray.tmin, tmax, found);
+        // t only: the winner's u, v are computed once, at the end.
+        unsigned hits = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
+                                                   ray.tmin, tmax, found);
         for (; hits != 0; hits &= hits - 1) {
           const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
           const PrimitiveKey key = prims.triangle_keys[slot + lane];
           if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
           hit.t = tmax = found.t[lane];
-          hit.u = found.u[lane];
-          hit.v = found.v[lane];
           hit.geom_id = key.geom_id;
           hit.prim_id = key.prim_id;
           best_is_sphere = false;
@@ -151,8 +150,10 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
-                                       prims.triangle_vertex(best_index, 2));
+    const glm::vec3 p0 = prims.triangle_vertex(best_index, 0), p1 = prims.triangle_vertex(best_index, 1),
+                    p2 = prims.triangle_vertex(best_index, 2);
+    triangle_barycentrics(tri_ray, p0, p1, p2, hit.t, hit.u, hit.v);
+    hit.ng = triangle_geometric_normal(p0, p1, p2);
   }
   return true;
 }
@@ -188,8 +189,8 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
         BlockHits unused;
-        found = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
-                                         unused) != 0;
+        found = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
+                                           unused) != 0;
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {
