@@ -43,6 +43,18 @@ inline unsigned lane_mask(std::uint32_t remaining) {
   return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
 }
 
+// Boxes are tested against a slightly wider interval than the primitives. A primitive counts when its
+// *correctly rounded* t lies in [tmin, tmax], so its exact t may lie half an ulp outside; and a box's computed
+// entry can exceed the exact one by gamma(3) (ray_box.h: the far distance is scaled, the near one is not).
+// Without the widening a box whose entry is the closest hit's own t, holding a second triangle crossed at
+// the same rounded t (coplanar triangles of a floor, where the box is flat), is culled, and the tie goes to
+// whichever triangle was found first instead of the lower id: found by the arbiter on Sponza (issue 11).
+// 2^-21 covers gamma(3) (3 * 2^-24 over 1 - 3 * 2^-24) plus half an ulp (at most 2^-24 relative) with room
+// for the rounding of the scaled bound itself. tmin, tmax >= 0, so scaling moves them outward; inf stays.
+inline constexpr float kCullUp = 1.0f + 0x1p-21f, kCullDown = 1.0f - 0x1p-21f;
+inline float cull_max(float tmax) { return tmax * kCullUp; }
+inline float cull_min(float tmin) { return tmin * kCullDown; }
+
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
 inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
   while (size > 0) {
@@ -96,13 +108,15 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
+  const float box_tmin = cull_min(ray.tmin);
+  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, cull_max(tmax), root_entry);
   while (more) {
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, ray.tmin, tmax, stack, size, index) ||
-             pop_next(stack, size, tmax, index);
+      const float box_tmax = cull_max(tmax);
+      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
+             pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -138,7 +152,7 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
         best_index = i;
       }
     }
-    more = pop_next(stack, size, tmax, index);
+    more = pop_next(stack, size, cull_max(tmax), index);
   }
 
   if (stats) {
@@ -174,13 +188,14 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
+  const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
+  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   while (more && !found) {
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, ray.tmin, ray.tmax, stack, size, index) ||
-             pop_next(stack, size, ray.tmax, index);
+      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
+             pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -200,7 +215,7 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
         found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
       }
     }
-    more = pop_next(stack, size, ray.tmax, index);
+    more = pop_next(stack, size, box_tmax, index);
   }
 
   if (stats) {

@@ -50,6 +50,7 @@
 
 #include <glm/vec3.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -172,11 +173,15 @@ inline bool certify_barycentrics(const glm::dvec3& o, const glm::dvec3& d, const
          certify_barycentric(qv, quotient.error(v_num, v_err, qv), v);
 }
 
+// How many times the exact path was taken, process-wide (for tests and measurements of the fallback rate).
+inline std::atomic<std::uint64_t> exact_fallbacks{0};
+
 // The exact path (GMP / MPFR): t, u, v of the crossing, or false when there is none (den == 0 or t rounds to
 // infinity). Out of line and cold.
 [[gnu::cold, gnu::noinline]] inline bool exact_crossing(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& p0,
                                                         const glm::dvec3& p1, const glm::dvec3& p2, float& t, float& u,
                                                         float& v) {
+  exact_fallbacks.fetch_add(1, std::memory_order_relaxed);
   if (!exact::triangle_crossing_attributes({o, d, p0, p1, p2}, t, u, v)) return false;
   return std::isfinite(t);
 }
