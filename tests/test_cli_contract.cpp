@@ -205,6 +205,11 @@ TEST(CliContract, CrosscheckExitsOneOnGenuineMismatch) {
   EXPECT_GT(j.at("arbiter").at(plugin).at("reasons").at("missed-hit").get<int>(), 0);
   EXPECT_EQ(j.at("arbiter").at("brute").at("wrong").get<int>(), 0);
   ASSERT_FALSE(j.at("arbiter").at(plugin).at("wrong_examples").empty());
+  const auto& example = j.at("arbiter").at(plugin).at("wrong_examples").at(0);
+  EXPECT_EQ(example.at("reason"), "missed-hit");
+  EXPECT_TRUE(example.at("answer").is_null());
+  EXPECT_TRUE(example.at("exact").is_object());
+  EXPECT_NE(example.at("ray").at("hex").get<std::string>().find("0x"), std::string::npos);
   EXPECT_NE(r.output.find("bits: org (0x"), std::string::npos) << r.output;
 }
 

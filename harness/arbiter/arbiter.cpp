@@ -129,8 +129,20 @@ Ruling Arbiter::rule_closest(const Ray& ray, const Hit& answer, const BackendTra
     if (answer.found()) return wrong(r, Reason::HitNotThere, "a hit on an invalid ray (core/geometry/ray.h: every backend misses)");
     return r;
   }
-  const std::vector<Candidate> candidates = near_candidates(impl_->exact, impl_->shapes, ray);
   const double dir_length = glm::length(glm::dvec3(ray.dir));
+  // The common case, decided without the neighbourhood: the exact answer itself (both miss, or the exact
+  // primitive at a t within tolerance of its exact crossing).
+  if (!answer.found() && !r.exact.found()) return r;
+  if (answer.found() && r.exact.found() && answer.geom_id == r.exact.geom_id && answer.prim_id == r.exact.prim_id &&
+      answer.t >= ray.tmin && answer.t <= ray.tmax) {
+    bool known = false;
+    const Candidate x = evaluate_primitive(impl_->shapes, ray, {answer.geom_id, answer.prim_id}, known);
+    if (known && x.crossing && std::fabs(answer.t - x.t_exact) <= x.t_tolerance(dir_length)) {
+      r.t_rel_error = relative_error(answer.t, x.t_exact);
+      return r;
+    }
+  }
+  const std::vector<Candidate> candidates = near_candidates(impl_->exact, impl_->shapes, ray);
   const Candidate* e = r.exact.found() ? find(candidates, r.exact.geom_id, r.exact.prim_id) : nullptr;
 
   if (!answer.found()) {

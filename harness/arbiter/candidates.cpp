@@ -130,6 +130,22 @@ ShapeIndex::ShapeIndex(const SceneGeometry& geometry) {
   }
 }
 
+Candidate evaluate_primitive(const ShapeIndex& shapes, const Ray& ray, PrimitiveRef ref, bool& ok) {
+  const glm::dvec3 o = exact::to_double_exact(ray.org), d = exact::to_double_exact(ray.dir);
+  Candidate c;
+  c.ref = ref;
+  ok = true;
+  const TriangleMesh* mesh = shapes.mesh(ref.geom_id);
+  if (mesh != nullptr && ref.prim_id < mesh->indices.size()) {
+    evaluate_triangle(*mesh, ref.prim_id, ray, o, d, frame_along(d), c);
+  } else if (const Sphere* sphere = shapes.sphere(ref.geom_id); sphere != nullptr && ref.prim_id == 0) {
+    evaluate_sphere(*sphere, ray, o, d, c);
+  } else {
+    ok = false;
+  }
+  return c;
+}
+
 std::vector<Candidate> near_candidates(const ExactBackend& exact, const ShapeIndex& shapes, const Ray& ray) {
   const glm::dvec3 o = exact::to_double_exact(ray.org), d = exact::to_double_exact(ray.dir);
   const double dir_length = glm::length(d);

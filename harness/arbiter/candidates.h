@@ -53,4 +53,8 @@ class ShapeIndex {
 // evaluated; hits are decided exactly.
 std::vector<Candidate> near_candidates(const ExactBackend& exact, const ShapeIndex& shapes, const Ray& ray);
 
+// One primitive, evaluated the same way (whether or not the ray reaches it). `ok` is false for an unknown
+// (geom_id, prim_id).
+Candidate evaluate_primitive(const ShapeIndex& shapes, const Ray& ray, PrimitiveRef ref, bool& ok);
+
 }  // namespace twinray::arbiter

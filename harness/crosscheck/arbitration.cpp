@@ -58,14 +58,14 @@ ArbitrationResult arbitrate(const arbiter::Arbiter& arbiter, std::span<const Ray
           out.closest_ruled = true;
           out.closest_reason = r.reason;
           out.t_rel_error = r.t_rel_error;
-          if (!r.right) out.wrong_closest = WrongAnswer{i, false, a.closest[i], false, std::move(r)};
+          if (!r.right) out.wrong_closest = WrongAnswer{i, ray, false, a.closest[i], false, std::move(r)};
         }
         if ((disputes[i] & kOcclusionDisputed) != 0) {
           const bool answered = a.occluded[i] != 0;
           arbiter::Ruling r = arbiter.rule_occluded(ray, answered, a.traits);
           out.occlusion_ruled = true;
           out.occlusion_reason = r.reason;
-          if (!r.right) out.wrong_occlusion = WrongAnswer{i, true, a.closest[i], answered, std::move(r)};
+          if (!r.right) out.wrong_occlusion = WrongAnswer{i, ray, true, a.closest[i], answered, std::move(r)};
         }
       }
     }

@@ -30,6 +30,7 @@ struct BackendAnswers {
 
 struct WrongAnswer {
   std::size_t ray_index = 0;
+  Ray ray;
   bool occlusion = false;  // an any-hit answer rather than a closest hit
   Hit answer;
   bool answered_occluded = false;

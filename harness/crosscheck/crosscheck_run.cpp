@@ -90,6 +90,7 @@ nlohmann::json tally_json(const ArbiterTally& t) {
   nlohmann::json examples = nlohmann::json::array();
   for (const WrongAnswer& w : t.examples)
     examples.push_back({{"ray_index", w.ray_index},
+                        {"ray", ray_json(w.ray)},
                         {"query", w.occlusion ? "any" : "closest"},
                         {"answer", w.occlusion ? nlohmann::json(w.answered_occluded) : hit_json(w.answer)},
                         {"exact", w.occlusion ? nlohmann::json(w.ruling.exact_occluded) : hit_json(w.ruling.exact)},
