@@ -125,20 +125,21 @@ inline Ends round_ends(double x, double err) {
 // rounding is the same as rounding after clamping. Values that round into the subnormal range go to the
 // exact path, except when the whole interval lies at or below 0 (then 0) or at or above 1 (then 1).
 inline bool certify_barycentric(double q, double err, float& out) {
-  const double slack = err + std::fabs(q) * 0x1p-52;
-  if (q + slack <= 0.0) {
+  const double slack = err + std::fabs(q) * 0x1p-52;  // as in round_ends
+  const double lo = q - slack, hi = q + slack;
+  if (hi <= 0.0) {
     out = 0.0f;
     return true;
   }
-  if (q - slack >= 1.0) {
+  if (lo >= 1.0) {
     out = 1.0f;
     return true;
   }
-  const Ends e = round_ends(q, err);
-  const float lo = e.lo < 0.0f ? 0.0f : (e.lo > 1.0f ? 1.0f : e.lo);
-  const float hi = e.hi < 0.0f ? 0.0f : (e.hi > 1.0f ? 1.0f : e.hi);
-  if (lo != hi || !(lo >= 0x1p-125f)) return false;
-  out = lo;
+  const float flo = static_cast<float>(lo), fhi = static_cast<float>(hi);
+  const float clo = flo < 0.0f ? 0.0f : (flo > 1.0f ? 1.0f : flo);
+  const float chi = fhi < 0.0f ? 0.0f : (fhi > 1.0f ? 1.0f : fhi);
+  if (clo != chi || !(clo >= 0x1p-125f)) return false;
+  out = clo;
   return true;
 }
 
