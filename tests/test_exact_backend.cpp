@@ -101,22 +101,22 @@ Agreement expect_exact_agrees_with_brute(const SceneGeometry& geometry, const st
 }
 
 TEST(ExactBackend, AgreesWithBruteExceptWhereTheFloatEdgeTestDiffers) {
-  const Agreement soup = expect_exact_agrees_with_brute(random_triangle_soup(1000, 7), exact_suite_rays(1, 1.5f, 4000));
+  const Agreement soup = expect_exact_agrees_with_brute(random_triangle_soup(1000, 7), exact_suite_rays(1, 1.5f, 2500));
   EXPECT_GT(soup.hits, soup.rays / 4);
   EXPECT_GE(soup.identical, soup.rays - soup.rays / 1000);
   const Agreement sphere =
-      expect_exact_agrees_with_brute(tessellated_sphere({0.5f, -0.25f, 0.0f}, 1.0f, 3), exact_suite_rays(2, 1.5f, 4000));
+      expect_exact_agrees_with_brute(tessellated_sphere({0.5f, -0.25f, 0.0f}, 1.0f, 3), exact_suite_rays(2, 1.5f, 2500));
   EXPECT_GT(sphere.hits, sphere.rays / 4);
   EXPECT_GE(sphere.identical, sphere.rays - sphere.rays / 1000);
-  const Agreement mixed = expect_exact_agrees_with_brute(mixed_spheres_and_triangles(100, 400, 9), exact_suite_rays(3, 1.5f, 4000));
+  const Agreement mixed = expect_exact_agrees_with_brute(mixed_spheres_and_triangles(100, 400, 9), exact_suite_rays(3, 1.5f, 2500));
   EXPECT_GT(mixed.hits, mixed.rays / 4);
   EXPECT_GE(mixed.identical, mixed.rays - mixed.rays / 1000);
-  const Agreement spheres = expect_exact_agrees_with_brute(random_spheres(200, 10), exact_suite_rays(4, 1.5f, 4000));
+  const Agreement spheres = expect_exact_agrees_with_brute(random_spheres(200, 10), exact_suite_rays(4, 1.5f, 2500));
   EXPECT_GT(spheres.hits, spheres.rays / 10);
   EXPECT_EQ(spheres.identical, spheres.rays);  // no edges on spheres: the roots are correctly rounded by both
   // Rays exactly through edges and vertices: the fill rule of the exact frame and of the float frame agree
   // whenever the float shear is exact (dyadic directions), and differ only at edges otherwise.
-  const Agreement grid = expect_exact_agrees_with_brute(grid_mesh(16, 16), exact_suite_grid_rays(5, 4000));
+  const Agreement grid = expect_exact_agrees_with_brute(grid_mesh(16, 16), exact_suite_grid_rays(5, 2500));
   EXPECT_GT(grid.hits, grid.rays / 2);
 }
 
