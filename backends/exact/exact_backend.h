@@ -53,6 +53,7 @@ class ExactBackend final : public Backend {
   // `margin` of that segment. Works on any ray with a finite origin and a non-zero finite direction.
   void primitives_near(const Ray& ray, double margin, double t_lo, double t_hi, std::vector<PrimitiveRef>& out) const;
 
+  // The flat tree and the primitives in leaf order (public only for the helpers of exact_backend.cpp).
   struct Node {
     glm::dvec3 lo, hi;        // exact (triangles) or outward-rounded (spheres) bounds of the subtree
     std::uint32_t offset = 0;  // interior: index of the second child; leaf: first primitive

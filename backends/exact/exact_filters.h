@@ -6,8 +6,8 @@
 // numerators e0 = d.(b x c), e1 = d.(c x a), e2 = d.(a x b) (a, b, c = vertices - origin) in double; each
 // elementary term passes through at most 6 roundings (two differences, a product, a difference, a product,
 // two additions), so each computed e_i is within gamma_6 P_i of the exact one, P_i the sum of the absolute
-// terms, bounded as in core/intersect/triangle_refine.h by 2 |d|_1 max|b| max|c| (and cyclically); 16 u P_i
-// covers that with room for the bound's own rounding. Two numerators certainly of opposite signs: the line
+// terms, bounded by 2 |d|_1 max|b| max|c| (and cyclically); 10u P_i (triangle_refine.h's constant, made for
+// up to 8 roundings) covers that with room for the bound's own rounding. Two numerators certainly of opposite signs: the line
 // misses the closed triangle. All three certainly of one sign: it crosses the interior (no fill rule, and
 // den = e0 + e1 + e2 is non-zero). Anything else goes to the exact test. No product underflows (every
 // non-zero difference of floats is at least 2^-149), so flush-to-zero cannot interfere.

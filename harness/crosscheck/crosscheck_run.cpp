@@ -237,15 +237,21 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
       arbiter_ruled_rays += a.ruled_rays;
       arbiter_seconds += a.seconds;
       if (a.capped()) capped_kinds.emplace_back(to_string(kind));
-      report += fmt::format("  arbiter (exact) on {} disputed rays{}, {:.2f} s:\n", a.disputed_rays,
-                            a.capped() ? fmt::format(" (cap reached: the first {} ruled)", a.ruled_rays) : "", a.seconds);
-      report += fmt::format("  {:<14} {:>8} {:>8} {:>14}  {}\n", "backend", "ruled", "wrong", "max t rel err",
-                            "wrong by reason");
+      if (a.disputed_rays == 0) {
+        report += "  arbiter (exact): no disputed rays\n";
+      } else {
+        report += fmt::format("  arbiter (exact) on {} disputed rays{}, {:.2f} s:\n", a.disputed_rays,
+                              a.capped() ? fmt::format(" (cap reached: the first {} ruled)", a.ruled_rays) : "",
+                              a.seconds);
+        report += fmt::format("  {:<14} {:>8} {:>8} {:>14}  {}\n", "backend", "ruled", "wrong", "max t rel err",
+                              "wrong by reason");
+      }
       nlohmann::json j_arbiter = nlohmann::json::object();
       for (std::size_t k = 0; k < backends.size(); ++k) {
         const ArbiterTally& t = a.backends[k];
-        report += fmt::format("  {:<14} {:>8} {:>8} {:>14.3g}  {}\n", names[k], t.ruled, t.wrong, t.max_t_rel_error,
-                              wrong_reasons_text(t));
+        if (a.disputed_rays != 0)
+          report += fmt::format("  {:<14} {:>8} {:>8} {:>14.3g}  {}\n", names[k], t.ruled, t.wrong, t.max_t_rel_error,
+                                wrong_reasons_text(t));
         j_arbiter[names[k]] = {{"ruled", t.ruled}, {"wrong", t.wrong}, {"max_t_rel_error", t.max_t_rel_error},
                                {"reasons", reasons_json(t)}};
         accumulate(arbiter_totals[k], t, kWrongExamples);
