@@ -18,6 +18,8 @@ PACKAGES=(
   libfmt-dev
   libpugixml-dev         # XML: Mitsuba 3 scenes (twinray export, .xml scenes)
   libseccomp-dev         # the plugin worker's system-call sandbox (backends/plugin/worker)
+  libgmp-dev             # exact rational arithmetic (GMP, gmpxx): the exact backend and the arbiter
+  libmpfr-dev            # correctly rounded conversion of exact values to float (MPFR)
 )
 
 missing=()

@@ -115,6 +115,7 @@ PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, st
     if (same) {
       ++c.identical;
     } else {
+      c.closest_disputes.push_back(i);
       switch (kind) {
         case MismatchClass::Edge: ++c.edge; break;
         case MismatchClass::Tie: ++c.tie; break;
@@ -126,6 +127,7 @@ PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, st
 
     if (with_occlusion) {
       const bool oa = occluded_a[i] != 0, ob = occluded_b[i] != 0;
+      if (oa != ob) c.occlusion_disputes.push_back(i);
       if (oa == ob) {
         ++c.occlusion_agree;
       } else if (ambiguous) {

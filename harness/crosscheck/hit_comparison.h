@@ -59,6 +59,9 @@ struct PairComparison {
   std::size_t occlusion_agree = 0;
   std::size_t occlusion_edge = 0, occlusion_genuine = 0;
   std::vector<Mismatch> examples;  // the first genuine mismatches, for diagnosis
+  // Every ray whose closest hits are not identical (edge, tie or genuine), and every ray whose any-hit answers
+  // differ, in ray order: what the arbiter rules on (harness/arbiter/arbiter.h).
+  std::vector<std::size_t> closest_disputes, occlusion_disputes;
 
   double identical_fraction() const { return rays ? static_cast<double>(identical) / static_cast<double>(rays) : 1.0; }
 };
