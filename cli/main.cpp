@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
   add_stress_command(app, run);
   add_converge_command(app, run);
   add_report_command(app, run);
+  add_trace_command(app, run);
+  add_grade_command(app, run);
 
   try {
     app.parse(argc, argv);

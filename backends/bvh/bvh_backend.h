@@ -7,11 +7,18 @@
 #include "backends/bvh/primitive_store.h"
 #include "core/backend/backend.h"
 
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
 
 namespace twinray {
+
+// One node entered by a traced query (see BvhBackend::intersect_traced).
+struct BvhVisit {
+  std::uint32_t node;  // index into nodes()
+  float tmax;          // end of the interval still searched when the node was entered
+};
 
 class BvhBackend final : public Backend {
  public:
@@ -29,6 +36,11 @@ class BvhBackend final : public Backend {
   // single-ray calls, fewer cache misses on incoherent rays.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const override;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats = nullptr) const override;
+
+  // The same queries (same code, same answers) that also record every node entered, in order: the visit
+  // order `twinray trace` prints. Not for hot paths: they allocate.
+  bool intersect_traced(const Ray& ray, Hit& hit, std::vector<BvhVisit>& visits, QueryStats* stats = nullptr) const;
+  bool occluded_traced(const Ray& ray, std::vector<BvhVisit>& visits, QueryStats* stats = nullptr) const;
 
   // Read-only access to the tree, for tests and tools.
   const BvhBuildOptions& options() const { return options_; }

@@ -31,6 +31,13 @@ struct BvhView {
   const PrimitiveStore* prims;
 };
 
+// Told about every node a query enters, in order, with the end of the interval still searched (the closest
+// hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
+// compiles away, so the production traversal carries no trace of it.
+struct NoVisitObserver {
+  void enter(std::uint32_t /*node*/, float /*tmax*/) const {}
+};
+
 namespace bvh_detail {
 
 struct StackEntry {
@@ -78,8 +85,8 @@ inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const B
 }  // namespace bvh_detail
 
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+template <bool kTriangles, bool kSpheres, typename Observer = NoVisitObserver>
+bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats, const Observer& observer = {}) {
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
@@ -98,6 +105,7 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
   std::uint32_t index = 0;
   bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
   while (more) {
+    observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
@@ -158,8 +166,8 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+template <bool kTriangles, bool kSpheres, typename Observer = NoVisitObserver>
+bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats, const Observer& observer = {}) {
   using namespace bvh_detail;
   if (bvh.nodes.empty()) return false;
   const BoxRay box_ray(ray);
@@ -175,6 +183,7 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
   std::uint32_t index = 0;
   bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
   while (more && !found) {
+    observer.enter(index, ray.tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
