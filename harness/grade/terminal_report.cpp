@@ -10,7 +10,7 @@ namespace twinray::grade {
 
 std::string format_points(double points) {
   if (points == std::floor(points) && std::fabs(points) < 1e15) return fmt::format("{}", static_cast<long long>(points));
-  return fmt::format("{:.2f}", points);
+  return fmt::format("{:.6g}", points);
 }
 
 namespace {
