@@ -1,5 +1,6 @@
 // twinray: one program, one subcommand per job. See docs/cli.md for the contract (flags, exit codes, JSON).
 
+#include "backends/plugin/plugin_failure.h"
 #include "cli/commands.h"
 #include "core/util/input_error.h"
 
@@ -37,6 +38,11 @@ int main(int argc, char** argv) {
   } catch (const twinray::InputError& e) {
     fmt::print(stderr, "twinray: error: {}\n", e.what());
     return kExitBadInput;
+  } catch (const twinray::PluginFailure& e) {
+    // The plugin under test crashed, hung or broke the contract: a failed check, not bad input.
+    fmt::print(stderr, "twinray: error: {}\n", e.what());
+    if (!e.output.empty()) fmt::print(stderr, "plugin output (stdout and stderr):\n{}\n", e.output);
+    return kExitCheckFailed;
   } catch (const std::exception& e) {
     fmt::print(stderr, "twinray: error: {}\n", e.what());
     return kExitBadInput;

@@ -1,9 +1,8 @@
 #include "backends/plugin/plugin_backend.h"
 
+#include "backends/plugin/plugin_hit.h"
+#include "backends/plugin/plugin_library.h"
 #include "backends/plugin/twinray_plugin.h"
-#include "core/util/input_error.h"
-
-#include <dlfcn.h>
 
 #include <algorithm>
 #include <cassert>
@@ -17,49 +16,10 @@
 
 namespace twinray {
 
-static_assert(sizeof(twinray_id) == sizeof(std::uint32_t), "ids cross the ABI as 32-bit unsigned integers");
-static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "mesh positions are passed as packed float triples");
-static_assert(sizeof(glm::uvec3) == 3 * sizeof(twinray_id), "mesh indices are passed as packed id triples");
-
 namespace {
 
 // Rays handed to an optional batch entry point per call; the staging buffers live on the stack.
 constexpr std::size_t kBatchChunk = 256;
-
-// dlopen handle, closed last (after the plugin instance is destroyed).
-class SharedLibrary {
- public:
-  explicit SharedLibrary(void* handle) : handle_(handle) {}
-  ~SharedLibrary() {
-    if (handle_ != nullptr) dlclose(handle_);
-  }
-  SharedLibrary(const SharedLibrary&) = delete;
-  SharedLibrary& operator=(const SharedLibrary&) = delete;
-  void* get() const { return handle_; }
-
- private:
-  void* handle_;
-};
-
-twinray_ray to_plugin_ray(const Ray& r) {
-  twinray_ray p;
-  p.org[0] = r.org.x;
-  p.org[1] = r.org.y;
-  p.org[2] = r.org.z;
-  p.tmin = r.tmin;
-  p.dir[0] = r.dir.x;
-  p.dir[1] = r.dir.y;
-  p.dir[2] = r.dir.z;
-  p.tmax = r.tmax;
-  return p;
-}
-
-twinray_hit plugin_miss() {
-  twinray_hit h{};
-  h.geom_id = TWINRAY_INVALID_ID;
-  h.prim_id = TWINRAY_INVALID_ID;
-  return h;
-}
 
 void add_stats(QueryStats* stats, std::size_t queries, const twinray_query_stats& plugin) {
   if (stats == nullptr) return;
@@ -70,12 +30,9 @@ void add_stats(QueryStats* stats, std::size_t queries, const twinray_query_stats
 
 class PluginBackend final : public Backend {
  public:
-  PluginBackend(std::filesystem::path path, std::unique_ptr<SharedLibrary> library, const twinray_plugin_v1& table,
-                void* self)
-      : path_(std::move(path)), library_(std::move(library)), table_(table), self_(self),
-        name_(std::string("plugin:") + table.name) {}
-
-  ~PluginBackend() override { table_.destroy(self_); }
+  explicit PluginBackend(std::unique_ptr<PluginLibrary> library)
+      : library_(std::move(library)), table_(library_->table()), self_(library_->self()),
+        name_(library_->backend_name()) {}
 
   std::string_view name() const override { return name_; }
 
@@ -132,35 +89,26 @@ class PluginBackend final : public Backend {
     }
   }
 
-  // A hit naming a geometry or primitive that does not exist would make the renderer index out of
-  // bounds, so it is an error rather than a wrong answer for the crosscheck to report.
+  // See plugin_hit.h: only a hit on a primitive that does not exist is refused.
   void accept_hit(const twinray_hit& h, Hit& hit) const {
-    if (h.geom_id >= prim_count_by_geom_.size() || h.prim_id >= prim_count_by_geom_[h.geom_id])
-      throw std::runtime_error(name_ + ": reported a hit on geom_id " + std::to_string(h.geom_id) + ", prim_id " +
-                               std::to_string(h.prim_id) + ", which the scene does not have");
-    hit.t = h.t;
-    hit.u = h.u;
-    hit.v = h.v;
-    hit.geom_id = h.geom_id;
-    hit.prim_id = h.prim_id;
-    hit.ng = glm::vec3(h.ng[0], h.ng[1], h.ng[2]);
+    if (!primitives_.exists(h.geom_id, h.prim_id)) throw std::runtime_error(nonexistent_primitive_message(name_, h));
+    hit = from_plugin_hit(h);
   }
 
-  std::filesystem::path path_;
-  std::unique_ptr<SharedLibrary> library_;  // destroyed after the destructor body has destroyed self_
-  twinray_plugin_v1 table_;                 // a copy: the plugin's table need not stay writable or aligned
+  std::unique_ptr<PluginLibrary> library_;  // destroys the instance, then closes the library
+  const twinray_plugin_v1& table_;
   void* self_;
   std::string name_;
   // What the plugin reads during and after build (twinray_plugin.h: valid until destroy).
   std::vector<twinray_mesh> meshes_;
   std::vector<twinray_sphere> spheres_;
-  std::vector<std::uint32_t> prim_count_by_geom_;  // 0 for ids that are not in the scene
+  PrimitiveIndex primitives_;
   BuildStats stats_;
 };
 
 void PluginBackend::build(const SceneGeometry& geometry) {
   const auto start = std::chrono::steady_clock::now();
-  prim_count_by_geom_.assign(geometry.geom_id_end(), 0);
+  primitives_ = PrimitiveIndex(geometry);
   meshes_.clear();
   spheres_.clear();
   for (const TriangleMesh& m : geometry.meshes) {
@@ -171,7 +119,6 @@ void PluginBackend::build(const SceneGeometry& geometry) {
     pm.indices = reinterpret_cast<const twinray_id*>(m.indices.data());
     pm.triangle_count = m.indices.size();
     meshes_.push_back(pm);
-    prim_count_by_geom_[m.geom_id] = static_cast<std::uint32_t>(m.indices.size());
   }
   for (const Sphere& s : geometry.spheres) {
     twinray_sphere ps;
@@ -181,7 +128,6 @@ void PluginBackend::build(const SceneGeometry& geometry) {
     ps.center[2] = s.center.z;
     ps.radius = s.radius;
     spheres_.push_back(ps);
-    prim_count_by_geom_[s.geom_id] = 1;
   }
   twinray_geometry g;
   g.meshes = meshes_.data();
@@ -195,7 +141,7 @@ void PluginBackend::build(const SceneGeometry& geometry) {
   guarded("build", [&] { status = table_.build(self_, &g, error, sizeof(error)); });
   if (status != TWINRAY_OK) {
     error[sizeof(error) - 1] = '\0';  // do not trust the plugin to terminate it
-    throw std::runtime_error(name_ + " (" + path_.string() + "): build failed: " +
+    throw std::runtime_error(name_ + " (" + library_->path().string() + "): build failed: " +
                              (error[0] != '\0' ? error : "no message given"));
   }
 
@@ -271,46 +217,7 @@ void PluginBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> 
 }  // namespace
 
 std::unique_ptr<Backend> load_plugin_backend(const std::filesystem::path& so) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(so, ec))
-    throw InputError(so, "", "plugin library not found (expected a shared library, e.g. libmybvh.so)");
-  // An absolute path: dlopen would otherwise search the library path for a bare file name.
-  const std::filesystem::path absolute = std::filesystem::absolute(so);
-  dlerror();  // clear any stale message
-  void* handle = dlopen(absolute.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (handle == nullptr) {
-    const char* why = dlerror();
-    throw InputError(so, "", std::string("cannot load it as a shared library: ") + (why != nullptr ? why : "unknown reason"));
-  }
-  auto library = std::make_unique<SharedLibrary>(handle);
-
-  dlerror();
-  void* symbol = dlsym(library->get(), TWINRAY_PLUGIN_ENTRY_SYMBOL);
-  if (symbol == nullptr)
-    throw InputError(so, "",
-                     "does not export " TWINRAY_PLUGIN_ENTRY_SYMBOL " (define it with C linkage and default "
-                     "visibility, see docs/plugin-abi.md)");
-  // POSIX guarantees that a dlsym result can be converted to a function pointer.
-  const auto entry = reinterpret_cast<twinray_plugin_entry_fn>(symbol);
-  const twinray_plugin_v1* table = entry();
-  if (table == nullptr) throw InputError(so, "", TWINRAY_PLUGIN_ENTRY_SYMBOL " returned NULL");
-  if (table->abi_version != TWINRAY_PLUGIN_ABI_VERSION)
-    throw InputError(so, "",
-                     "plugin ABI version mismatch: the plugin was built for version " +
-                         std::to_string(table->abi_version) + ", this twinray implements version " +
-                         std::to_string(TWINRAY_PLUGIN_ABI_VERSION) + " (rebuild it against backends/plugin/twinray_plugin.h)");
-  if (table->name == nullptr || table->name[0] == '\0') throw InputError(so, "", "the plugin table has no name");
-  const std::pair<const char*, bool> required[] = {
-      {"create", table->create != nullptr},         {"destroy", table->destroy != nullptr},
-      {"build", table->build != nullptr},           {"intersect1", table->intersect1 != nullptr},
-      {"occluded1", table->occluded1 != nullptr},
-  };
-  for (const auto& [function, present] : required)
-    if (!present) throw InputError(so, "", std::string("the plugin table leaves the required function '") + function + "' NULL");
-
-  void* self = table->create();
-  if (self == nullptr) throw InputError(so, "", "the plugin's create() returned NULL");
-  return std::make_unique<PluginBackend>(so, std::move(library), *table, self);
+  return std::make_unique<PluginBackend>(PluginLibrary::load(so));
 }
 
 }  // namespace twinray

@@ -1,5 +1,8 @@
 #pragma once
-// A backend loaded at run time from a shared library that implements the C ABI of twinray_plugin.h.
+// A backend loaded at run time from a shared library that implements the C ABI of twinray_plugin.h, running
+// the plugin's code inside this process: `plugin-inprocess:PATH`, for plugins you trust and for debugging a
+// plugin under gdb or a sanitizer. A plugin that crashes takes the calling process down with it; `plugin:PATH`
+// runs the same plugin in an isolated, sandboxed worker process instead (isolated_plugin_backend.h).
 //
 // The adapter owns the library handle and the plugin instance, checks every ray before the plugin sees it
 // (an invalid ray is a miss, core/geometry/ray.h), converts between twinray's types and the ABI's plain C

@@ -1,0 +1,837 @@
+#include "backends/plugin/isolated_plugin_backend.h"
+
+#include "backends/plugin/futex.h"
+#include "backends/plugin/geometry_blob.h"
+#include "backends/plugin/plugin_hit.h"
+#include "backends/plugin/sanitizer_build.h"
+#include "backends/plugin/shared_memory.h"
+#include "backends/plugin/worker_process.h"
+#include "backends/plugin/worker_protocol.h"
+#include "core/util/input_error.h"
+
+#include <seccomp.h>
+#include <signal.h>
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cassert>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <mutex>
+#include <new>
+#include <stdexcept>
+
+namespace twinray {
+
+namespace pw = plugin_worker;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// How long a caller waits for the answer (yielding, futex.h) before it sleeps in the kernel. A single ray
+// through a simple plugin comes back in one to a few microseconds while the worker thread is awake; a futex
+// sleep and wake-up costs ten or more. Longer calls are not worth the system calls of yielding.
+constexpr auto kCallerSpin = std::chrono::microseconds(50);
+// How long twinray waits for a worker it has killed to be reaped (its output drained) before reporting.
+constexpr auto kReapWait = std::chrono::seconds(5);
+// Added to every handshake word when the worker dies, so a caller about to sleep on it does not (see
+// on_worker_exit).
+constexpr std::uint32_t kDeathBump = 1u << 31;
+
+enum class Stage { Load, Build, Intersect, Occluded, Destroy };
+
+const char* stage_name(Stage s) {
+  switch (s) {
+    case Stage::Load: return "load";
+    case Stage::Build: return "build";
+    case Stage::Intersect: return "intersect";
+    case Stage::Occluded: return "occluded";
+    case Stage::Destroy: return "destroy";
+  }
+  return "?";
+}
+
+// A NUL-terminated string written by the worker, which may not have terminated it.
+std::string bounded_string(const char* chars, std::size_t capacity) {
+  return std::string(chars, strnlen(chars, capacity));
+}
+
+std::string signal_name(int sig) {
+  const char* abbreviation = sigabbrev_np(sig);
+  return abbreviation != nullptr ? std::string("SIG") + abbreviation : fmt::format("signal {}", sig);
+}
+
+std::string syscall_name(int number) {
+  char* name = seccomp_syscall_resolve_num_arch(SCMP_ARCH_NATIVE, number);
+  if (name == nullptr) return fmt::format("syscall {}", number);
+  std::string s(name);
+  std::free(name);
+  return s;
+}
+
+// The worker's whole environment: nothing of twinray's but what loading a library may need, and, in a
+// sanitizer build, options that keep ASan's own signal handling out of the worker's crash reporting.
+std::vector<std::string> worker_environment(const PluginLimits& limits) {
+  std::vector<std::string> env;
+  // The dynamic loader finds a plugin's dependencies there (the sandbox allows reading those directories).
+  if (const char* path = std::getenv("LD_LIBRARY_PATH")) env.push_back(std::string("LD_LIBRARY_PATH=") + path);
+  if constexpr (kAddressSanitizer) {
+    const auto inherited = [](const char* name) {
+      const char* v = std::getenv(name);
+      return v != nullptr && v[0] != '\0' ? std::string(v) + ":" : std::string();
+    };
+    // handle_*=0: a plugin's SIGSEGV, SIGABRT... reach the worker's handler and end the worker with that
+    //   signal, instead of ASan printing a report and exiting with its own code.
+    // detect_leaks=0: LeakSanitizer stops the world with ptrace and a clone() without CLONE_THREAD at exit,
+    //   which the sandbox forbids; the worker ends with _exit anyway, and leaks of a plugin are not ours.
+    // allocator_may_return_null=1: an allocation over the memory limit returns NULL (errno ENOMEM) as glibc's
+    //   malloc does, so it is reported as out-of-memory rather than as an ASan report.
+    // soft_rss_limit_mb + can_use_proc_maps_statm=0: ASan's primary allocator serves small blocks from address
+    //   space reserved at start, which RLIMIT_AS cannot limit; this limit on resident memory can (checked by
+    //   ASan's background thread with getrusage, not by opening /proc, which the sandbox forbids).
+    const std::size_t mb = std::max<std::size_t>(1, limits.memory_bytes >> 20);
+    env.push_back("ASAN_OPTIONS=" + inherited("ASAN_OPTIONS") +
+                  "detect_leaks=0:handle_segv=0:handle_sigbus=0:handle_sigfpe=0:handle_sigill=0:handle_abort=0:"
+                  "handle_sigtrap=0:allow_user_segv_handler=1:allocator_may_return_null=1:can_use_proc_maps_statm=0:"
+                  "soft_rss_limit_mb=" + std::to_string(mb));
+    const std::string ubsan = inherited("UBSAN_OPTIONS");
+    if (!ubsan.empty()) env.push_back("UBSAN_OPTIONS=" + ubsan.substr(0, ubsan.size() - 1));
+  }
+  return env;
+}
+
+// Printed once per process when the worker could not install every layer of the sandbox.
+void warn_once_about_sandbox(const std::string& description) {
+  static std::atomic<bool> warned{false};
+  if (warned.exchange(true)) return;
+  std::fprintf(stderr, "twinray: warning: plugin sandbox incomplete on this system: %s\n", description.c_str());
+}
+
+// What one channel is doing, for attributing a failure to the exact ray. Parent-private.
+struct RequestContext {
+  bool active = false;
+  Stage stage = Stage::Intersect;
+  std::span<const Ray> rays;              // the caller's rays
+  const std::size_t* source = nullptr;    // request index -> index into rays (nullptr: the same index)
+  std::uint32_t count = 0;
+};
+
+struct ChannelSlot {
+  std::atomic<bool> busy{false};
+  std::uint32_t sequence = 0;  // the last request number posted; only the holder touches it
+  mutable std::mutex mutex;    // guards context: the monitor thread reads it when the worker dies
+  RequestContext context;
+  std::array<std::size_t, pw::kChunkRays> source{};  // a batch chunk's request index -> caller's index
+};
+
+}  // namespace
+
+class IsolatedPluginBackend::Impl {
+ public:
+  Impl(const std::filesystem::path& so, const PluginLimits& limits);
+  ~Impl();
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  const std::string& name() const { return name_; }
+  BackendTraits traits() const;
+  void build(const SceneGeometry& geometry);
+  BuildStats build_stats() const { return stats_; }
+  bool intersect(const Ray& ray, Hit& hit, QueryStats* stats);
+  bool occluded(const Ray& ray, QueryStats* stats);
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats);
+  void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats);
+
+  void set_deadline(std::optional<Clock::time_point> deadline) { limits_.deadline = deadline; }
+  const PluginLimits& limits() const { return limits_; }
+  std::string captured_output() const { return worker_ ? worker_->output() : std::string(); }
+  std::optional<PluginFailure> failure() const;
+  const std::string& sandbox_description() const { return sandbox_; }
+  void shutdown();
+
+ private:
+  // A channel held for one call: acquired on construction, released (context cleared) on destruction.
+  class Lease {
+   public:
+    explicit Lease(Impl& impl) : impl_(impl), index_(impl.acquire_channel()) {}
+    ~Lease() { impl_.release_channel(index_); }
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    std::size_t index() const { return index_; }
+    pw::Channel& channel() const { return impl_.block_->channels[index_]; }
+    ChannelSlot& slot() const { return impl_.slots_[index_]; }
+
+   private:
+    Impl& impl_;
+    std::size_t index_;
+  };
+
+  std::size_t acquire_channel();
+  void release_channel(std::size_t index);
+  void set_context(const Lease& lease, const RequestContext& context);
+
+  // Posts the channel's request and waits for the answer. Throws PluginFailure when the worker dies, when one
+  // plugin call takes longer than `per_call` or the deadline passes (then the worker is killed).
+  void round_trip(const Lease& lease, std::chrono::duration<double> per_call);
+  void post(const Lease& lease);
+  void wait_for_answer(const Lease& lease, std::uint32_t sequence, std::chrono::duration<double> per_call);
+  void wait_for_startup();
+
+  // The first failure is the one reported; later ones (the worker dying after twinray killed it) are not.
+  void record_failure(PluginFailureDetails details, int channel);
+  // Kills the worker and waits until it is reaped and its output drained, so the failure carries all of it.
+  void end_worker();
+  [[noreturn]] void fail(PluginFailureDetails details, int channel);
+  [[noreturn]] void fail_timeout(const Lease& lease, Stage stage, bool deadline_passed,
+                                 std::chrono::duration<double> per_call);
+  [[noreturn]] void fail_from_status(const Lease& lease, Stage stage);
+  [[noreturn]] void fail_bad_hit(const Lease& lease, Stage stage, std::size_t request_index, const twinray_hit& h);
+  PluginFailure failure_for(int channel) const;
+  void throw_if_failed() const;
+  // The ray at `request_index` of the channel's current request: its index in the caller's span and its value.
+  void attribute_ray(const RequestContext& context, std::uint32_t request_index, PluginFailureDetails& d) const;
+
+  void on_worker_exit(const WorkerTermination& t);
+  PluginFailureDetails classify_death(const WorkerTermination& t, int& channel) const;
+  PluginFailureDetails base_details() const;
+
+  std::filesystem::path path_;
+  PluginLimits limits_;
+  std::string name_;
+  std::uint32_t flags_ = 0;
+  std::string sandbox_;
+
+  SharedMemoryFile control_file_;
+  SharedMapping control_map_;
+  pw::ControlBlock* block_;
+  std::array<ChannelSlot, pw::kChannels> slots_;
+  std::atomic<std::uint32_t> releases_{0};  // bumped on every channel release, for callers waiting for one
+
+  mutable std::mutex failure_mutex_;
+  std::optional<PluginFailureDetails> failure_;
+  int failure_channel_ = -1;
+  std::atomic<bool> ended_{false};          // the worker is gone or being killed: every call throws
+  std::atomic<bool> clean_exit_expected_{false};
+  bool shut_down_ = false;
+  bool built_ = false;
+
+  PrimitiveIndex primitives_;
+  BuildStats stats_;
+
+  // Last: destroyed first, so the monitor thread (which calls on_worker_exit) has stopped before any member
+  // it touches goes away.
+  std::unique_ptr<WorkerProcess> worker_;
+};
+
+IsolatedPluginBackend::Impl::Impl(const std::filesystem::path& so, const PluginLimits& limits)
+    : path_(so),
+      limits_(limits),
+      control_file_(round_up(sizeof(pw::ControlBlock), page_size())),
+      control_map_(control_file_, 0, control_file_.size()),
+      block_(new (control_map_.data()) pw::ControlBlock()) {
+  block_->header.control_bytes = control_file_.size();
+  block_->header.memory_bytes = limits_.memory_bytes;
+  // The worker resolves the path against the same working directory; absolute, so its sandbox can name the
+  // plugin's folder.
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(so, ec);
+  worker_ = std::make_unique<WorkerProcess>(find_plugin_worker(), std::vector<std::string>{ec ? so.string() : absolute.string()},
+                                            worker_environment(limits_), control_file_.fd(), limits_.output_bytes,
+                                            [this](const WorkerTermination& t) { on_worker_exit(t); });
+  wait_for_startup();
+}
+
+IsolatedPluginBackend::Impl::~Impl() {
+  try {
+    shutdown();
+  } catch (const std::exception&) {
+    // A plugin whose destroy() fails cannot make a destructor throw; shutdown() reports it to callers that ask.
+  }
+  worker_.reset();
+}
+
+void IsolatedPluginBackend::Impl::wait_for_startup() {
+  const auto started = Clock::now();
+  auto limit = started + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.build_seconds));
+  const bool deadline_first = limits_.deadline && *limits_.deadline < limit;
+  if (deadline_first) limit = *limits_.deadline;
+  std::uint32_t state;
+  for (;;) {
+    state = block_->header.startup.load(std::memory_order_acquire);
+    if (state != static_cast<std::uint32_t>(pw::Startup::Starting) || ended_.load()) break;
+    const auto now = Clock::now();
+    if (now >= limit) {
+      PluginFailureDetails d = base_details();
+      d.kind = PluginFailureKind::Timeout;
+      d.cause = "timeout";
+      d.stage = "load";
+      d.detail = deadline_first ? std::string("the deadline passed")
+                                : fmt::format("loading and create() took longer than {} s", limits_.build_seconds);
+      fail(d, -1);
+    }
+    pw::futex_wait(&block_->header.startup, state, limit - now);
+  }
+  if (ended_.load()) throw failure_for(-1);
+  const pw::Header& h = block_->header;
+  switch (static_cast<pw::Startup>(state)) {
+    case pw::Startup::Ready:
+      name_ = "plugin:" + bounded_string(h.plugin_name, sizeof h.plugin_name);
+      flags_ = h.plugin_flags;
+      sandbox_ = bounded_string(h.sandbox, sizeof h.sandbox);
+      if (h.sandbox_complete == 0) warn_once_about_sandbox(sandbox_);
+      return;
+    case pw::Startup::LoadFailed:
+      // The in-process loader's own message, produced by the same code in the worker.
+      throw InputError(path_, "", bounded_string(h.message, sizeof h.message));
+    case pw::Startup::SetupFailed:
+      throw std::runtime_error(fmt::format("{}: the plugin worker could not set itself up: {}", path_.string(),
+                                           bounded_string(h.message, sizeof h.message)));
+    case pw::Startup::Starting: break;
+  }
+  throw std::runtime_error(fmt::format("{}: the plugin worker answered with an unknown state {}", path_.string(), state));
+}
+
+BackendTraits IsolatedPluginBackend::Impl::traits() const {
+  BackendTraits t;
+  t.counts_traversal = (flags_ & TWINRAY_PLUGIN_COUNTS_TRAVERSAL) != 0;
+  t.honours_ties = (flags_ & TWINRAY_PLUGIN_HONOURS_TIES) != 0;
+  t.watertight = (flags_ & TWINRAY_PLUGIN_WATERTIGHT) != 0;
+  return t;
+}
+
+// ---- channels ----------------------------------------------------------------------------------------------
+
+std::size_t IsolatedPluginBackend::Impl::acquire_channel() {
+  // Start where this thread last found a free channel: concurrent callers spread over the channels and each
+  // keeps meeting the same (awake, cache-warm) worker thread.
+  thread_local std::size_t hint = 0;
+  for (;;) {
+    const std::uint32_t seen = releases_.load(std::memory_order_acquire);
+    for (std::size_t k = 0; k < pw::kChannels; ++k) {
+      const std::size_t i = (hint + k) % pw::kChannels;
+      if (!slots_[i].busy.exchange(true, std::memory_order_acquire)) {
+        hint = i;
+        return i;
+      }
+    }
+    releases_.wait(seen, std::memory_order_acquire);  // all 16 in use: wait for a release
+  }
+}
+
+void IsolatedPluginBackend::Impl::release_channel(std::size_t index) {
+  {
+    std::lock_guard lock(slots_[index].mutex);
+    slots_[index].context = RequestContext{};
+  }
+  slots_[index].busy.store(false, std::memory_order_release);
+  releases_.fetch_add(1, std::memory_order_release);
+  releases_.notify_one();
+}
+
+void IsolatedPluginBackend::Impl::set_context(const Lease& lease, const RequestContext& context) {
+  std::lock_guard lock(lease.slot().mutex);
+  lease.slot().context = context;
+}
+
+void IsolatedPluginBackend::Impl::post(const Lease& lease) {
+  pw::Channel& c = lease.channel();
+  const std::uint32_t sequence = ++lease.slot().sequence;
+  // seq_cst store, then seq_cst load of worker_sleeping: paired with the worker's store of worker_sleeping and
+  // load of request, one of the two sides always sees the other, so a wake-up is never lost.
+  c.request.store(sequence, std::memory_order_seq_cst);
+  if (c.worker_sleeping.load(std::memory_order_seq_cst) != 0) pw::futex_wake_all(&c.request);
+}
+
+void IsolatedPluginBackend::Impl::round_trip(const Lease& lease, std::chrono::duration<double> per_call) {
+  post(lease);
+  wait_for_answer(lease, lease.slot().sequence, per_call);
+}
+
+void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint32_t sequence,
+                                                  std::chrono::duration<double> per_call) {
+  pw::Channel& c = lease.channel();
+  const auto started = Clock::now();
+  if (pw::spin_yielding([&] { return c.response.load(std::memory_order_acquire) == sequence; }, kCallerSpin)) return;
+  // The per-call limit runs from the moment the worker starts a ray: a batch may take long in all, as long as
+  // every single ray is quick. `current` is the worker's index of the ray in flight.
+  auto progress_at = started;
+  std::uint32_t progress = c.current.load(std::memory_order_relaxed);
+  const auto per_call_ticks = std::chrono::duration_cast<Clock::duration>(per_call);
+  for (;;) {
+    const std::uint32_t seen = c.response.load(std::memory_order_seq_cst);
+    if (seen == sequence) return;
+    if (ended_.load()) throw failure_for(static_cast<int>(lease.index()));
+    const auto now = Clock::now();
+    const std::uint32_t at = c.current.load(std::memory_order_relaxed);
+    if (at != progress) {
+      progress = at;
+      progress_at = now;
+    }
+    auto limit = progress_at + per_call_ticks;
+    const bool deadline_first = limits_.deadline && *limits_.deadline < limit;
+    if (deadline_first) limit = *limits_.deadline;
+    if (now >= limit) fail_timeout(lease, lease.slot().context.stage, deadline_first, per_call);
+    c.parent_sleeping.store(1, std::memory_order_seq_cst);
+    if (c.response.load(std::memory_order_seq_cst) == seen && !ended_.load()) pw::futex_wait(&c.response, seen, limit - now);
+    c.parent_sleeping.store(0, std::memory_order_relaxed);
+  }
+}
+
+// ---- failures ----------------------------------------------------------------------------------------------
+
+PluginFailureDetails IsolatedPluginBackend::Impl::base_details() const {
+  PluginFailureDetails d;
+  d.plugin = name_.empty() ? path_.string() : fmt::format("{} ({})", name_, path_.string());
+  return d;
+}
+
+void IsolatedPluginBackend::Impl::record_failure(PluginFailureDetails details, int channel) {
+  std::lock_guard lock(failure_mutex_);
+  if (!failure_) {
+    failure_ = std::move(details);
+    failure_channel_ = channel;
+  }
+  ended_.store(true);
+}
+
+void IsolatedPluginBackend::Impl::end_worker() {
+  ended_.store(true);
+  if (!worker_) return;
+  worker_->kill();
+  worker_->wait_for_exit(kReapWait);
+}
+
+void IsolatedPluginBackend::Impl::fail(PluginFailureDetails details, int channel) {
+  record_failure(std::move(details), channel);
+  end_worker();
+  throw failure_for(channel);
+}
+
+PluginFailure IsolatedPluginBackend::Impl::failure_for(int channel) const {
+  PluginFailureDetails d;
+  {
+    std::lock_guard lock(failure_mutex_);
+    if (!failure_) {
+      // Ended without a failure: shut down, or killed while shutting down.
+      d = base_details();
+      d.cause = "exit";
+      d.detail = "the plugin worker has been shut down";
+      return PluginFailure(d);
+    }
+    d = *failure_;
+    // ray_index is an index into the caller's own span: only the caller whose ray it was gets it.
+    if (channel < 0 || channel != failure_channel_) d.ray_index.reset();
+  }
+  if (worker_) d.output = worker_->output();
+  return PluginFailure(d);
+}
+
+void IsolatedPluginBackend::Impl::throw_if_failed() const {
+  if (!ended_.load()) return;
+  PluginFailure first = failure_for(-1);
+  PluginFailureDetails d = first;
+  d.ray_index.reset();
+  d.detail = d.detail.empty() ? std::string("the worker ended in an earlier call; make a new instance")
+                              : d.detail + "; the worker ended in an earlier call; make a new instance";
+  throw PluginFailure(d);
+}
+
+std::optional<PluginFailure> IsolatedPluginBackend::Impl::failure() const {
+  {
+    std::lock_guard lock(failure_mutex_);
+    if (!failure_) return std::nullopt;
+  }
+  return failure_for(-1);
+}
+
+void IsolatedPluginBackend::Impl::attribute_ray(const RequestContext& context, std::uint32_t request_index,
+                                                PluginFailureDetails& d) const {
+  if (request_index >= context.count) return;  // the worker's word, so checked
+  const std::size_t index = context.source != nullptr ? context.source[request_index] : request_index;
+  if (index >= context.rays.size()) return;
+  d.ray_index = index;
+  d.ray = context.rays[index];
+}
+
+void IsolatedPluginBackend::Impl::fail_timeout(const Lease& lease, Stage stage, bool deadline_passed,
+                                               std::chrono::duration<double> per_call) {
+  PluginFailureDetails d = base_details();
+  d.kind = PluginFailureKind::Timeout;
+  d.cause = "timeout";
+  d.stage = stage_name(stage);
+  {
+    std::lock_guard lock(lease.slot().mutex);
+    attribute_ray(lease.slot().context, lease.channel().current.load(), d);
+  }
+  d.detail = deadline_passed ? std::string("the deadline passed")
+                             : fmt::format("one call took longer than {} s", per_call.count());
+  fail(d, static_cast<int>(lease.index()));
+}
+
+void IsolatedPluginBackend::Impl::fail_from_status(const Lease& lease, Stage stage) {
+  const pw::Channel& c = lease.channel();
+  PluginFailureDetails d = base_details();
+  d.kind = PluginFailureKind::Crash;
+  d.stage = stage_name(stage);
+  const std::string message = bounded_string(c.message, sizeof c.message);
+  switch (c.status) {
+    case pw::Status::Exception:
+      d.cause = "exception";
+      d.detail = message;
+      break;
+    case pw::Status::OutOfMemory:
+      d.cause = "out-of-memory";
+      d.detail = message.empty() ? "std::bad_alloc" : message;
+      break;
+    default:
+      end_worker();
+      throw std::runtime_error(fmt::format("{}: the plugin worker failed in {}: {}", d.plugin, d.stage,
+                                           message.empty() ? "unknown status" : message));
+  }
+  {
+    std::lock_guard lock(lease.slot().mutex);
+    attribute_ray(lease.slot().context, c.current.load(), d);
+  }
+  fail(d, static_cast<int>(lease.index()));
+}
+
+void IsolatedPluginBackend::Impl::fail_bad_hit(const Lease& lease, Stage stage, std::size_t request_index,
+                                               const twinray_hit& h) {
+  PluginFailureDetails d = base_details();
+  d.kind = PluginFailureKind::ContractViolation;
+  d.cause = "bad-hit";
+  d.stage = stage_name(stage);
+  {
+    std::lock_guard lock(lease.slot().mutex);
+    attribute_ray(lease.slot().context, static_cast<std::uint32_t>(request_index), d);
+  }
+  d.detail = fmt::format("reported a hit on geom_id {}, prim_id {}, which the scene does not have", h.geom_id, h.prim_id);
+  fail(d, static_cast<int>(lease.index()));
+}
+
+// Runs on the monitor thread as soon as the worker has been reaped.
+void IsolatedPluginBackend::Impl::on_worker_exit(const WorkerTermination& t) {
+  const bool clean = clean_exit_expected_.load() && t.exited && t.exit_code == 0 &&
+                     block_->header.crash.what.load() == pw::kCrashNone;
+  if (!clean) {
+    int channel = -1;
+    PluginFailureDetails d = classify_death(t, channel);
+    record_failure(std::move(d), channel);
+  }
+  ended_.store(true);
+  // Wake every caller that waits for an answer, and one waiting for the worker to start. The words change
+  // before the wake, so a caller that read the old value and is just about to sleep on it returns at once
+  // (futex_wait compares first) and then sees ended_.
+  block_->header.startup.fetch_add(kDeathBump);
+  pw::futex_wake_all(&block_->header.startup);
+  for (pw::Channel& c : block_->channels) {
+    c.response.fetch_add(kDeathBump);
+    pw::futex_wake_all(&c.response);
+  }
+}
+
+PluginFailureDetails IsolatedPluginBackend::Impl::classify_death(const WorkerTermination& t, int& channel) const {
+  PluginFailureDetails d = base_details();
+  d.kind = PluginFailureKind::Crash;
+  const pw::CrashRecord& record = block_->header.crash;
+  const std::uint32_t what = record.what.load();
+  const std::int32_t thread = record.thread.load();
+
+  // Whose ray: the thread the signal handler (or exit) ran on, else the only channel running plugin code.
+  channel = -1;
+  if (what != pw::kCrashNone && thread >= 0 && static_cast<std::size_t>(thread) < pw::kChannels) channel = thread;
+  if (channel < 0) {
+    int running = 0;
+    for (std::size_t i = 0; i < pw::kChannels; ++i)
+      if (block_->channels[i].in_plugin.load() != 0) {
+        channel = static_cast<int>(i);
+        ++running;
+      }
+    if (running != 1) channel = -1;
+  }
+  const bool loading = block_->header.loading.load() != 0 ||
+                       (block_->header.startup.load() & ~kDeathBump) == static_cast<std::uint32_t>(pw::Startup::Starting);
+  if (channel >= 0) {
+    std::lock_guard lock(slots_[static_cast<std::size_t>(channel)].mutex);
+    const RequestContext& context = slots_[static_cast<std::size_t>(channel)].context;
+    if (context.active) {
+      d.stage = stage_name(context.stage);
+      if (context.stage == Stage::Intersect || context.stage == Stage::Occluded)
+        attribute_ray(context, block_->channels[static_cast<std::size_t>(channel)].current.load(), d);
+    }
+  }
+  if (d.stage.empty() && loading) d.stage = "load";
+  if (d.stage.empty()) {
+    for (const ChannelSlot& s : slots_) {
+      std::lock_guard lock(s.mutex);
+      if (s.context.active) {
+        d.stage = stage_name(s.context.stage);
+        break;
+      }
+    }
+  }
+  if (d.stage.empty()) d.detail = "while no call was in progress (a thread of the plugin?)";
+
+  if (t.exited) {
+    d.cause = "exit";
+    d.exit_code = t.exit_code;
+    return d;
+  }
+  d.signal_name = signal_name(t.signal);
+  const bool handled_signal = what == pw::kCrashSignal && record.signal.load() == t.signal;
+  if (t.signal == SIGSYS && handled_signal && record.syscall.load() >= 0) {
+    d.cause = "sandbox";
+    d.syscall = syscall_name(record.syscall.load());
+  } else if (handled_signal && record.allocation_failed.load() != 0) {
+    d.cause = "out-of-memory";
+  } else if (t.signal == SIGABRT) {
+    d.cause = "abort";
+  } else {
+    d.cause = "signal";
+    if (t.signal == SIGKILL && !t.killed_by_twinray)
+      d.detail = "SIGKILL not sent by twinray: the kernel's out-of-memory killer, or another process";
+  }
+  return d;
+}
+
+// ---- build and queries ---------------------------------------------------------------------------------------
+
+void IsolatedPluginBackend::Impl::build(const SceneGeometry& geometry) {
+  throw_if_failed();
+  if (built_) throw std::logic_error(name_ + ": build() called twice (the ABI allows one build per instance)");
+  built_ = true;
+  const auto start = Clock::now();
+  primitives_ = PrimitiveIndex(geometry);
+
+  // The scene goes after the control block, at a page boundary so the worker can map exactly that part.
+  const std::size_t offset = round_up(control_file_.size(), page_size());
+  const std::size_t bytes = std::max<std::size_t>(geometry_blob_bytes(geometry), 1);
+  control_file_.grow(offset + round_up(bytes, page_size()));
+  {
+    // twinray's own mapping is only for writing; the worker keeps its read-only one until destroy.
+    const SharedMapping blob(control_file_, offset, bytes);
+    write_geometry_blob(geometry, blob.data());
+  }
+
+  Lease lease(*this);
+  pw::Channel& c = lease.channel();
+  c.op = pw::Op::Build;
+  c.count = 0;
+  c.geometry_offset = offset;
+  c.geometry_bytes = bytes;
+  set_context(lease, RequestContext{true, Stage::Build, {}, nullptr, 0});
+  round_trip(lease, std::chrono::duration<double>(limits_.build_seconds));
+  switch (c.status) {
+    case pw::Status::Ok: break;
+    case pw::Status::BuildFailed:
+      // As the in-process backend words it: the plugin declined, it did not crash.
+      throw std::runtime_error(name_ + " (" + path_.string() + "): build failed: " +
+                               [&] {
+                                 const std::string m = bounded_string(c.message, sizeof c.message);
+                                 return m.empty() ? std::string("no message given") : m;
+                               }());
+    default: fail_from_status(lease, Stage::Build);
+  }
+
+  stats_ = BuildStats{};
+  stats_.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  stats_.triangles = geometry.triangle_count();
+  stats_.spheres = geometry.sphere_count();
+  stats_.built_triangles = geometry.has_triangles();
+  stats_.built_spheres = geometry.has_spheres();
+  const pw::BuildStatsWire wire = c.build_stats;
+  if (wire.reported != 0) {
+    stats_.memory_bytes = wire.memory_bytes;
+    stats_.nodes = wire.nodes;
+    stats_.leaves = wire.leaves;
+    stats_.max_depth = wire.max_depth;
+    stats_.sah_cost = wire.sah_cost;
+  }
+}
+
+namespace {
+void add_stats(QueryStats* stats, std::size_t queries, std::uint64_t nodes, std::uint64_t primitives) {
+  if (stats == nullptr) return;
+  stats->queries += queries;
+  stats->nodes_visited += nodes;
+  stats->primitives_tested += primitives;
+}
+}  // namespace
+
+bool IsolatedPluginBackend::Impl::intersect(const Ray& ray, Hit& hit, QueryStats* stats) {
+  throw_if_failed();
+  hit = Hit{};
+  if (!is_valid_ray(ray)) {  // a miss, never sent (core/geometry/ray.h)
+    add_stats(stats, 1, 0, 0);
+    return false;
+  }
+  Lease lease(*this);
+  pw::Channel& c = lease.channel();
+  c.op = pw::Op::Intersect;
+  c.count = 1;
+  c.rays[0] = to_plugin_ray(ray);
+  set_context(lease, RequestContext{true, Stage::Intersect, std::span<const Ray>(&ray, 1), nullptr, 1});
+  round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+  if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Intersect);
+  const pw::RayResult r = c.results[0];  // one copy: what is checked is what is used
+  add_stats(stats, 1, c.nodes_visited, c.primitives_tested);
+  if (r.found == 0) return false;
+  if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, 0, r.hit);
+  hit = from_plugin_hit(r.hit);
+  return true;
+}
+
+bool IsolatedPluginBackend::Impl::occluded(const Ray& ray, QueryStats* stats) {
+  throw_if_failed();
+  if (!is_valid_ray(ray)) {
+    add_stats(stats, 1, 0, 0);
+    return false;
+  }
+  Lease lease(*this);
+  pw::Channel& c = lease.channel();
+  c.op = pw::Op::Occluded;
+  c.count = 1;
+  c.rays[0] = to_plugin_ray(ray);
+  set_context(lease, RequestContext{true, Stage::Occluded, std::span<const Ray>(&ray, 1), nullptr, 1});
+  round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+  if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Occluded);
+  const std::uint32_t found = c.results[0].found;
+  add_stats(stats, 1, c.nodes_visited, c.primitives_tested);
+  return found != 0;
+}
+
+// A batch runs on one channel, in chunks of up to kChunkRays valid rays (invalid rays are misses and never
+// sent), like the in-process backend runs it on the calling thread.
+void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) {
+  assert(rays.size() == hits.size());
+  throw_if_failed();
+  std::uint64_t nodes = 0, primitives = 0;
+  Lease lease(*this);
+  pw::Channel& c = lease.channel();
+  std::array<std::size_t, pw::kChunkRays>& source = lease.slot().source;
+  std::size_t i = 0;
+  while (i < rays.size()) {
+    std::uint32_t n = 0;
+    for (; i < rays.size() && n < pw::kChunkRays; ++i) {
+      hits[i] = Hit{};
+      if (!is_valid_ray(rays[i])) continue;
+      c.rays[n] = to_plugin_ray(rays[i]);
+      source[n++] = i;
+    }
+    if (n == 0) continue;
+    c.op = pw::Op::Intersect;
+    c.count = n;
+    set_context(lease, RequestContext{true, Stage::Intersect, rays, source.data(), n});
+    round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+    if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Intersect);
+    nodes += c.nodes_visited;
+    primitives += c.primitives_tested;
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const pw::RayResult r = c.results[k];
+      if (r.found == 0) continue;
+      if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
+      hits[source[k]] = from_plugin_hit(r.hit);
+    }
+  }
+  add_stats(stats, rays.size(), nodes, primitives);
+}
+
+void IsolatedPluginBackend::Impl::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) {
+  assert(rays.size() == occluded.size());
+  throw_if_failed();
+  std::uint64_t nodes = 0, primitives = 0;
+  Lease lease(*this);
+  pw::Channel& c = lease.channel();
+  std::array<std::size_t, pw::kChunkRays>& source = lease.slot().source;
+  std::size_t i = 0;
+  while (i < rays.size()) {
+    std::uint32_t n = 0;
+    for (; i < rays.size() && n < pw::kChunkRays; ++i) {
+      occluded[i] = 0;
+      if (!is_valid_ray(rays[i])) continue;
+      c.rays[n] = to_plugin_ray(rays[i]);
+      source[n++] = i;
+    }
+    if (n == 0) continue;
+    c.op = pw::Op::Occluded;
+    c.count = n;
+    set_context(lease, RequestContext{true, Stage::Occluded, rays, source.data(), n});
+    round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+    if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Occluded);
+    nodes += c.nodes_visited;
+    primitives += c.primitives_tested;
+    for (std::uint32_t k = 0; k < n; ++k) occluded[source[k]] = c.results[k].found != 0 ? 1 : 0;
+  }
+  add_stats(stats, rays.size(), nodes, primitives);
+}
+
+void IsolatedPluginBackend::Impl::shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  if (ended_.load() || !worker_ || !worker_->running()) {
+    ended_.store(true);
+    return;
+  }
+  {
+    Lease lease(*this);  // no call is in flight (Backend contract), so this does not wait
+    pw::Channel& c = lease.channel();
+    c.op = pw::Op::Destroy;
+    c.count = 0;
+    set_context(lease, RequestContext{true, Stage::Destroy, {}, nullptr, 0});
+    clean_exit_expected_.store(true);
+    post(lease);
+    // The worker answers a destroy by exiting; its exit status is the answer.
+    if (!worker_->wait_for_exit(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.query_seconds)))) {
+      PluginFailureDetails d = base_details();
+      d.kind = PluginFailureKind::Timeout;
+      d.cause = "timeout";
+      d.stage = "destroy";
+      d.detail = fmt::format("destroy() took longer than {} s", limits_.query_seconds);
+      record_failure(d, static_cast<int>(lease.index()));
+      end_worker();
+    }
+  }
+  ended_.store(true);
+  if (failure()) throw *failure();
+}
+
+// ---- the public class ----------------------------------------------------------------------------------------
+
+IsolatedPluginBackend::IsolatedPluginBackend(const std::filesystem::path& so, const PluginLimits& limits)
+    : impl_(std::make_unique<Impl>(so, limits)) {}
+IsolatedPluginBackend::~IsolatedPluginBackend() = default;
+
+std::string_view IsolatedPluginBackend::name() const { return impl_->name(); }
+BackendTraits IsolatedPluginBackend::traits() const { return impl_->traits(); }
+void IsolatedPluginBackend::build(const SceneGeometry& geometry) { impl_->build(geometry); }
+BuildStats IsolatedPluginBackend::build_stats() const { return impl_->build_stats(); }
+bool IsolatedPluginBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
+  return impl_->intersect(ray, hit, stats);
+}
+bool IsolatedPluginBackend::occluded(const Ray& ray, QueryStats* stats) const { return impl_->occluded(ray, stats); }
+void IsolatedPluginBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {
+  impl_->intersect(rays, hits, stats);
+}
+void IsolatedPluginBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) const {
+  impl_->occluded(rays, occluded, stats);
+}
+void IsolatedPluginBackend::set_deadline(std::optional<std::chrono::steady_clock::time_point> deadline) {
+  impl_->set_deadline(deadline);
+}
+const PluginLimits& IsolatedPluginBackend::limits() const { return impl_->limits(); }
+std::string IsolatedPluginBackend::captured_output() const { return impl_->captured_output(); }
+std::optional<PluginFailure> IsolatedPluginBackend::failure() const { return impl_->failure(); }
+std::string IsolatedPluginBackend::sandbox_description() const { return impl_->sandbox_description(); }
+void IsolatedPluginBackend::shutdown() { impl_->shutdown(); }
+
+std::unique_ptr<IsolatedPluginBackend> make_isolated_plugin_backend(const std::filesystem::path& so,
+                                                                    const PluginLimits& limits) {
+  return std::make_unique<IsolatedPluginBackend>(so, limits);
+}
+
+}  // namespace twinray

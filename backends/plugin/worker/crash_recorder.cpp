@@ -1,0 +1,74 @@
+#include "backends/plugin/worker/crash_recorder.h"
+
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+
+namespace twinray::plugin_worker {
+
+namespace {
+
+CrashRecord* g_record = nullptr;
+// Constant-initialised, so reading it in a signal handler touches no lazily created state.
+thread_local std::int32_t t_role = kPluginThread;
+
+constexpr int kFatalSignals[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS};
+constexpr std::size_t kAlternateStackBytes = 64 * 1024;
+
+// The first fatal event wins; a second thread crashing at the same moment does not overwrite it.
+bool claim(std::uint32_t what) {
+  std::uint32_t none = kCrashNone;
+  return g_record != nullptr && g_record->what.compare_exchange_strong(none, what);
+}
+
+void on_fatal_signal(int sig, siginfo_t* info, void*) {
+  const int saved_errno = errno;  // first: anything below could change it
+  if (claim(kCrashSignal)) {
+    g_record->signal.store(sig);
+    g_record->thread.store(t_role);
+    // The worker sets errno to 0 before every plugin call, so ENOMEM here means an allocation failed during
+    // this call (malloc returns NULL with errno ENOMEM at the RLIMIT_AS limit); the crash is its consequence.
+    g_record->allocation_failed.store(saved_errno == ENOMEM ? 1u : 0u);
+    if (sig == SIGSYS) g_record->syscall.store(info->si_syscall);
+  }
+  // SA_RESETHAND has already restored the default action. Re-raise for this thread: the signal is blocked
+  // while the handler runs and is delivered, fatally, as it returns. (For a fault, returning would re-execute
+  // the faulting instruction anyway; for SIGSYS and raised signals it would not.)
+  syscall(SYS_tgkill, getpid(), gettid(), sig);
+}
+
+void on_exit_called() {
+  if (claim(kCrashExit)) g_record->thread.store(t_role);
+}
+
+}  // namespace
+
+void install_crash_recorder(CrashRecord& record) {
+  g_record = &record;
+  struct sigaction action {};
+  action.sa_sigaction = on_fatal_signal;
+  action.sa_flags = SA_SIGINFO | SA_ONSTACK | SA_RESETHAND;
+  sigfillset(&action.sa_mask);  // nothing interrupts the recording
+  for (const int sig : kFatalSignals) sigaction(sig, &action, nullptr);
+  // The worker itself never calls exit() (it ends with _exit), so an atexit handler running means plugin code
+  // called exit(). _exit() from plugin code runs no handler; twinray then attributes it by the channel that was
+  // running plugin code.
+  std::atexit(on_exit_called);
+}
+
+void set_thread_role(std::int32_t role) { t_role = role; }
+
+void install_alternate_signal_stack() {
+  void* memory = mmap(nullptr, kAlternateStackBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (memory == MAP_FAILED) return;  // without it, an overflow still kills the worker; only attribution suffers
+  stack_t stack{};
+  stack.ss_sp = memory;
+  stack.ss_size = kAlternateStackBytes;
+  sigaltstack(&stack, nullptr);
+}
+
+}  // namespace twinray::plugin_worker

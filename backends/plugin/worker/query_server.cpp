@@ -1,0 +1,212 @@
+#include "backends/plugin/worker/query_server.h"
+
+#include "backends/plugin/futex.h"
+#include "backends/plugin/worker/crash_recorder.h"
+
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <thread>
+
+namespace twinray::plugin_worker {
+
+namespace {
+
+// How long a query thread waits for the next request (yielding, futex.h) before it sleeps: twinray's renderer
+// sends its next ray within microseconds, and catching it awake saves both sides a futex wake-up.
+constexpr auto kWorkerSpin = std::chrono::microseconds(50);
+
+void copy_message(char* destination, std::size_t capacity, const char* text) {
+  const std::size_t n = strnlen(text, capacity - 1);
+  std::memmove(destination, text, n);
+  destination[n] = '\0';
+}
+
+twinray_hit miss() {
+  twinray_hit h{};
+  h.geom_id = TWINRAY_INVALID_ID;
+  h.prim_id = TWINRAY_INVALID_ID;
+  return h;
+}
+
+// Runs plugin code, turning an escaping C++ exception into the channel's status (a plugin in C++ that throws
+// breaks the C ABI's rule; unwinding through C frames would end in std::terminate, which is an abort).
+template <typename F>
+void guarded(Channel& c, F&& call) {
+  c.in_plugin.store(1, std::memory_order_relaxed);
+  try {
+    call();
+  } catch (const std::bad_alloc& e) {
+    c.status = Status::OutOfMemory;
+    copy_message(c.message, sizeof c.message, e.what());
+  } catch (const std::exception& e) {
+    c.status = Status::Exception;
+    copy_message(c.message, sizeof c.message, e.what());
+  } catch (...) {
+    c.status = Status::Exception;
+    copy_message(c.message, sizeof c.message, "an exception not derived from std::exception");
+  }
+  c.in_plugin.store(0, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+QueryServer::QueryServer(ControlBlock& block, int control_fd, std::function<std::string()> install_query_filter)
+    : block_(block), control_fd_(control_fd), install_query_filter_(std::move(install_query_filter)) {}
+
+void QueryServer::start_threads() {
+  for (std::size_t i = 0; i < kChannels; ++i) std::thread([this, i] { serve(i); }).detach();
+}
+
+std::uint32_t QueryServer::wait_for_request(Channel& c, std::uint32_t seen) {
+  if (spin_yielding([&] { return c.request.load(std::memory_order_acquire) != seen; }, kWorkerSpin))
+    return c.request.load(std::memory_order_acquire);
+  // seq_cst store, then seq_cst load: paired with twinray's store of request and load of worker_sleeping
+  // (isolated_plugin_backend.cpp), one side always sees the other.
+  c.worker_sleeping.store(1, std::memory_order_seq_cst);
+  std::uint32_t now;
+  while ((now = c.request.load(std::memory_order_seq_cst)) == seen) futex_wait(&c.request, seen);
+  c.worker_sleeping.store(0, std::memory_order_relaxed);
+  return now;
+}
+
+void QueryServer::serve(std::size_t index) {
+  set_thread_role(static_cast<std::int32_t>(index));
+  install_alternate_signal_stack();
+  Channel& c = block_.channels[index];
+  // Requests are numbered from 1. Starting from 0 rather than from the word's current value matters: twinray
+  // may post the first request before this thread has started.
+  std::uint32_t seen = 0;
+  for (;;) {
+    seen = wait_for_request(c, seen);
+    c.status = Status::Ok;
+    c.message[0] = '\0';
+    switch (c.op) {
+      case Op::Build: run_build(c); break;
+      case Op::Intersect: run_queries(c, true); break;
+      case Op::Occluded: run_queries(c, false); break;
+      case Op::Destroy: run_destroy(c);
+      case Op::None: break;
+    }
+    c.response.store(seen, std::memory_order_seq_cst);
+    if (c.parent_sleeping.load(std::memory_order_seq_cst) != 0) futex_wake_all(&c.response);
+  }
+}
+
+void QueryServer::run_queries(Channel& c, bool closest) {
+  const std::uint32_t n = std::min<std::uint32_t>(c.count, static_cast<std::uint32_t>(kChunkRays));
+  const twinray_plugin_v1& table = plugin_->table();
+  const void* self = plugin_->self();
+  twinray_query_stats stats{};
+  guarded(c, [&] {
+    for (std::uint32_t k = 0; k < n; ++k) {
+      c.current.store(k, std::memory_order_relaxed);
+      const twinray_ray ray = c.rays[k];  // the plugin's copy: twinray does not touch it during the call
+      errno = 0;                          // see crash_recorder.cpp: ENOMEM at a crash means a failed allocation
+      if (closest) {
+        twinray_hit hit = miss();
+        const int found = table.intersect1(self, &ray, &hit, &stats);
+        c.results[k].hit = hit;
+        c.results[k].found = found != 0 ? 1 : 0;
+      } else {
+        c.results[k].found = table.occluded1(self, &ray, &stats) != 0 ? 1 : 0;
+      }
+    }
+  });
+  c.nodes_visited = stats.nodes_visited;
+  c.primitives_tested = stats.primitives_tested;
+}
+
+void QueryServer::run_build(Channel& c) {
+  // The scene, mapped read-only and never unmapped: the plugin may keep pointers into it until destroy.
+  const std::size_t bytes = c.geometry_bytes;
+  void* mapping = bytes > 0 ? mmap(nullptr, bytes, PROT_READ, MAP_SHARED, control_fd_, static_cast<off_t>(c.geometry_offset))
+                            : MAP_FAILED;
+  if (mapping == MAP_FAILED) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, "cannot map the scene");
+    return;
+  }
+  const auto* base = static_cast<const unsigned char*>(mapping);
+  GeometryBlobHeader header;
+  std::memcpy(&header, base, sizeof header);
+  const std::size_t tables = sizeof header + header.mesh_count * sizeof(MeshRecord) + header.sphere_count * sizeof(twinray_sphere);
+  const bool counts_fit = header.mesh_count < bytes && header.sphere_count < bytes && tables <= bytes;
+  meshes_.clear();
+  bool fits = counts_fit;
+  for (std::uint64_t m = 0; fits && m < header.mesh_count; ++m) {
+    MeshRecord r;
+    std::memcpy(&r, base + sizeof header + m * sizeof(MeshRecord), sizeof r);
+    fits = r.positions_offset <= bytes && r.vertex_count <= (bytes - r.positions_offset) / (3 * sizeof(float)) &&
+           r.indices_offset <= bytes && r.triangle_count <= (bytes - r.indices_offset) / (3 * sizeof(twinray_id));
+    twinray_mesh mesh;
+    mesh.geom_id = r.geom_id;
+    mesh.positions = reinterpret_cast<const float*>(base + r.positions_offset);
+    mesh.vertex_count = r.vertex_count;
+    mesh.indices = reinterpret_cast<const twinray_id*>(base + r.indices_offset);
+    mesh.triangle_count = r.triangle_count;
+    meshes_.push_back(mesh);
+  }
+  if (!fits) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, "the scene in shared memory is malformed");
+    return;
+  }
+  twinray_geometry geometry;
+  geometry.meshes = meshes_.data();
+  geometry.mesh_count = meshes_.size();
+  geometry.spheres = reinterpret_cast<const twinray_sphere*>(base + sizeof header + header.mesh_count * sizeof(MeshRecord));
+  geometry.sphere_count = header.sphere_count;
+  geometry.geom_id_end = header.geom_id_end;
+
+  const twinray_plugin_v1& table = plugin_->table();
+  void* self = plugin_->self();
+  char error[sizeof c.message] = {};
+  int result = TWINRAY_ERROR;
+  twinray_build_stats stats{};
+  guarded(c, [&] {
+    errno = 0;
+    result = table.build(self, &geometry, error, sizeof error);
+    if (result == TWINRAY_OK && table.build_stats != nullptr) table.build_stats(self, &stats);
+  });
+  if (c.status == Status::Ok) {
+    if (result != TWINRAY_OK) {
+      c.status = Status::BuildFailed;
+      error[sizeof error - 1] = '\0';  // do not trust the plugin to terminate it
+      copy_message(c.message, sizeof c.message, error);
+    } else {
+      c.build_stats.reported = table.build_stats != nullptr ? 1 : 0;
+      c.build_stats.memory_bytes = stats.memory_bytes;
+      c.build_stats.nodes = stats.nodes;
+      c.build_stats.leaves = stats.leaves;
+      c.build_stats.max_depth = stats.max_depth;
+      c.build_stats.sah_cost = stats.sah_cost;
+    }
+  }
+  // From here on the plugin cannot open any file: whatever it needed to read, it has read while building.
+  const std::string filter_error = install_query_filter_();
+  if (!filter_error.empty()) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, filter_error.c_str());
+  }
+}
+
+void QueryServer::run_destroy(Channel& c) {
+  try {
+    c.in_plugin.store(1, std::memory_order_relaxed);
+    plugin_->table().destroy(plugin_->self());
+  } catch (...) {
+    std::abort();  // reported as an abort in stage "destroy"
+  }
+  // _exit, not exit: no atexit handler (the crash recorder's would report an exit), no static destructors.
+  _exit(0);
+}
+
+}  // namespace twinray::plugin_worker

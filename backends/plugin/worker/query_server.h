@@ -1,0 +1,42 @@
+#pragma once
+// The worker's side of the channels (worker_protocol.h): one thread per channel waits for a request, calls
+// the plugin and answers. Queries are made one ray at a time through intersect1 / occluded1, with the ray's
+// index in shared memory before each call, so a crash or a hang is attributed to exactly one ray. (The
+// optional batch entry points are not used here: a crash inside one could not be attributed.)
+
+#include "backends/plugin/plugin_library.h"
+#include "backends/plugin/worker_protocol.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace twinray::plugin_worker {
+
+class QueryServer {
+ public:
+  // `install_query_filter` runs after build, before the answer goes back (seccomp_filter.h, phase Querying);
+  // it returns an error text or an empty string.
+  QueryServer(ControlBlock& block, int control_fd, std::function<std::string()> install_query_filter);
+
+  // Starts the channel threads. They answer requests only once the parent has seen Startup::Ready, which is
+  // after set_plugin.
+  void start_threads();
+  void set_plugin(PluginLibrary& plugin) { plugin_ = &plugin; }
+
+ private:
+  [[noreturn]] void serve(std::size_t index);
+  std::uint32_t wait_for_request(Channel& c, std::uint32_t seen);
+  void run_build(Channel& c);
+  void run_queries(Channel& c, bool closest);
+  [[noreturn]] void run_destroy(Channel& c);
+
+  ControlBlock& block_;
+  int control_fd_;
+  std::function<std::string()> install_query_filter_;
+  PluginLibrary* plugin_ = nullptr;
+  // The scene as the plugin sees it; valid until destroy (the ABI's promise).
+  std::vector<twinray_mesh> meshes_;
+};
+
+}  // namespace twinray::plugin_worker

@@ -1,0 +1,221 @@
+/*
+ * A plugin that misbehaves on purpose, for tests/test_plugin_isolation.cpp. It is built once per behaviour,
+ * each with one TWINRAY_HOSTILE_* macro defined (tests/plugins/CMakeLists.txt). Every query answers "miss",
+ * except on a trigger ray: one whose direction has an exactly zero component (the classic crash of a slab
+ * test that divides by it). Then, by behaviour:
+ *
+ *   SEGV        writes through a null pointer              ALLOC       allocates (and touches) without bound
+ *   LOOP        loops forever                              BAD_HIT     reports a hit on geom_id 999
+ *   ABORT       calls abort()                              OPEN_READ   opens a file for reading
+ *   EXIT        calls exit(3)                              OPEN_WRITE  creates a file for writing
+ *   PRINT       prints 120 KiB to stdout and to stderr     SOCKET      opens a TCP socket
+ *               while building, then crashes like SEGV     FORK        calls fork()
+ *   NORMAL      builds with four threads that allocate     EXEC        calls execl("/bin/true")
+ *               and print (what ordinary plugins do)
+ *   BUILD_CRASH   writes through a null pointer in build
+ *   BUILD_READ    tries to read /etc/passwd in build: the build fails with what happened
+ *   BUILD_WRITE   tries to create a file in build
+ *   CRASH_AT_100  like SEGV, but its trigger is the 100th query (for the command-line tests, whose rays
+ *                 have no zero component)
+ *
+ * Strict C89 like the other test plugins, plus the POSIX calls it needs.
+ */
+#define _POSIX_C_SOURCE 200112L
+
+#include "twinray_plugin.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+static void* hostile_create(void) { return calloc(1, 16); }
+
+static void hostile_destroy(void* self) { free(self); }
+
+/* Not static: each build uses only some helpers, and unused static functions would warn. The plugin exports
+ * only the entry point either way (hidden visibility). */
+void write_message(char* error, size_t capacity, const char* message) {
+  size_t k;
+  if (capacity == 0) return;
+  for (k = 0; k + 1 < capacity && message[k] != '\0'; ++k) error[k] = message[k];
+  error[k] = '\0';
+}
+
+void crash(void) {
+  volatile int* volatile nowhere = NULL;
+  *nowhere = 1;
+}
+
+#ifdef TWINRAY_HOSTILE_NORMAL
+static void* normal_worker(void* arg) {
+  size_t i, sum = 0;
+  size_t* numbers = (size_t*)malloc(1000 * sizeof(size_t));
+  if (numbers == NULL) return NULL;
+  for (i = 0; i < 1000; ++i) numbers[i] = i;
+  for (i = 0; i < 1000; ++i) sum += numbers[i];
+  free(numbers);
+  *(size_t*)arg = sum;
+  return NULL;
+}
+#endif
+
+static int hostile_build(void* self, const twinray_geometry* geometry, char* error, size_t capacity) {
+  (void)self;
+  (void)geometry;
+  (void)error;
+  (void)capacity;
+#ifdef TWINRAY_HOSTILE_BUILD_CRASH
+  crash();
+#endif
+#ifdef TWINRAY_HOSTILE_BUILD_READ
+  {
+    FILE* f = fopen("/etc/passwd", "r");
+    if (f != NULL) {
+      fclose(f);
+      write_message(error, capacity, "opened /etc/passwd");
+    } else {
+      char message[128];
+      sprintf(message, "could not open /etc/passwd: %.80s", strerror(errno));
+      write_message(error, capacity, message);
+    }
+    return TWINRAY_ERROR;
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_BUILD_WRITE
+  {
+    FILE* f = fopen("/tmp/twinray-hostile-build-write.txt", "w");
+    if (f != NULL) fclose(f);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_PRINT
+  {
+    int line;
+    for (line = 0; line < 2000; ++line) {
+      fprintf(stdout, "stdout line %04d of the hostile plugin, padded to fifty bytes\n", line);
+      fprintf(stderr, "stderr line %04d of the hostile plugin, padded to fifty bytes\n", line);
+    }
+    fflush(stdout);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_NORMAL
+  {
+    pthread_t threads[4];
+    size_t sums[4];
+    int t;
+    for (t = 0; t < 4; ++t)
+      if (pthread_create(&threads[t], NULL, normal_worker, &sums[t]) != 0) {
+        write_message(error, capacity, "pthread_create failed");
+        return TWINRAY_ERROR;
+      }
+    for (t = 0; t < 4; ++t) pthread_join(threads[t], NULL);
+    printf("built with 4 threads, sums %lu %lu %lu %lu\n", (unsigned long)sums[0], (unsigned long)sums[1],
+           (unsigned long)sums[2], (unsigned long)sums[3]);
+    fflush(stdout);
+  }
+#endif
+  return TWINRAY_OK;
+}
+
+#ifdef TWINRAY_HOSTILE_CRASH_AT_100
+static unsigned long queries_so_far; /* one caller at a time in the tests that use it */
+static int is_trigger(const twinray_ray* ray) {
+  (void)ray;
+  return ++queries_so_far == 100;
+}
+#else
+static int is_trigger(const twinray_ray* ray) { return ray->dir[0] == 0.0f || ray->dir[1] == 0.0f || ray->dir[2] == 0.0f; }
+#endif
+
+/* What the behaviour does on a trigger ray. Returns 1 when it reports a hit (BAD_HIT). */
+static int misbehave(twinray_hit* hit) {
+#if defined(TWINRAY_HOSTILE_SEGV) || defined(TWINRAY_HOSTILE_PRINT) || defined(TWINRAY_HOSTILE_CRASH_AT_100)
+  crash();
+#endif
+#ifdef TWINRAY_HOSTILE_LOOP
+  {
+    volatile unsigned long spins = 0;
+    for (;;) ++spins;
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_ABORT
+  abort();
+#endif
+#ifdef TWINRAY_HOSTILE_EXIT
+  exit(3);
+#endif
+#ifdef TWINRAY_HOSTILE_ALLOC
+  {
+    void* chain = NULL;
+    for (;;) {
+      char* block = (char*)malloc(1u << 20);
+      memset(block, 1, 1u << 20); /* a NULL block faults here once the memory limit is reached */
+      *(void**)block = chain;
+      chain = block;
+    }
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_OPEN_READ
+  {
+    FILE* f = fopen("/etc/hostname", "r");
+    if (f != NULL) fclose(f);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_OPEN_WRITE
+  {
+    FILE* f = fopen("/tmp/twinray-hostile-query-write.txt", "w");
+    if (f != NULL) fclose(f);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_SOCKET
+  {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd >= 0) close(fd);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_FORK
+  {
+    const pid_t child = fork();
+    if (child == 0) _exit(0);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_EXEC
+  execl("/bin/true", "true", (char*)NULL);
+#endif
+#ifdef TWINRAY_HOSTILE_BAD_HIT
+  hit->t = 1.0f;
+  hit->u = hit->v = 0.0f;
+  hit->geom_id = 999u;
+  hit->prim_id = 0u;
+  hit->ng[0] = hit->ng[1] = 0.0f;
+  hit->ng[2] = 1.0f;
+  return 1;
+#endif
+  (void)hit;
+  return 0;
+}
+
+static int hostile_intersect1(const void* self, const twinray_ray* ray, twinray_hit* hit, twinray_query_stats* stats) {
+  (void)self;
+  (void)stats;
+  if (is_trigger(ray)) return misbehave(hit);
+  return 0;
+}
+
+static int hostile_occluded1(const void* self, const twinray_ray* ray, twinray_query_stats* stats) {
+  twinray_hit ignored;
+  (void)self;
+  (void)stats;
+  if (is_trigger(ray)) return misbehave(&ignored);
+  return 0;
+}
+
+static const twinray_plugin_v1 hostile_table = {
+    TWINRAY_PLUGIN_ABI_VERSION, "hostile", 0u, hostile_create, hostile_destroy, hostile_build,
+    hostile_intersect1,         hostile_occluded1, NULL, NULL, NULL,
+};
+
+TWINRAY_PLUGIN_EXPORT const twinray_plugin_v1* twinray_plugin_entry(void) { return &hostile_table; }
