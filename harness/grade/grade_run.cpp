@@ -30,6 +30,14 @@ bool claims(const BackendTraits& traits, Category category) {
   return true;
 }
 
+// Every built-in backend a check of this category uses on its scene.
+void prepare_references(CheckContext& ctx) {
+  ctx.scene.reference("embree");  // rays that start on surfaces come from its first hits
+  ctx.scene.reference(ctx.reference_name());
+  if (ctx.spec.category == Category::Performance) ctx.scene.reference("embree-fast");
+  if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality) ctx.scene.reference("bvh");
+}
+
 std::vector<const CheckSpec*> selected_checks(const Suite& suite, const std::vector<std::string>& only) {
   std::vector<const CheckSpec*> checks;
   if (only.empty()) {
@@ -106,8 +114,11 @@ Scorecard run_grade(const GradeSettings& settings) {
     } else {
       std::unique_ptr<GradeScene>& scene = scenes[spec.scene];
       if (!scene) scene = std::make_unique<GradeScene>(scene_spec, suite);
-      CheckContext ctx{spec, *scene, env, check_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                            std::chrono::duration<double>(spec.time_limit_seconds))};
+      CheckContext ctx{spec, *scene, env, {}};
+      // The references are built before the check's clock starts: its time limit is the plugin's.
+      prepare_references(ctx);
+      ctx.deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                           std::chrono::duration<double>(spec.time_limit_seconds));
       try {
         CheckVerdict v = run_check(ctx);
         r.outcome = v.passed ? Outcome::Pass : Outcome::Fail;
@@ -131,6 +142,7 @@ Scorecard run_grade(const GradeSettings& settings) {
         r.outcome = f.outcome;
         r.detail = f.detail;
         r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
+        if (!f.output.empty()) r.figures["plugin_output"] = f.output;
       }
       if (!r.required && r.failed() && spec.requirement == Requirement::IfClaimed)
         r.detail += " (not claimed by the plugin: reported, not required)";

@@ -26,11 +26,11 @@ struct LaunchLimits {
 
 class PluginLauncher {
  public:
-  // Loads the plugin once to check it (InputError for a missing file, a library that is not a plugin, a
-  // wrong ABI version) and to read its name and claims.
+  // Loads the plugin once, in a worker, to check it (InputError for a missing file, a library that is not a
+  // plugin, a wrong ABI version, a plugin that dies while loading) and to read its name and claims.
   explicit PluginLauncher(std::filesystem::path so);
 
-  // A fresh, unbuilt instance.
+  // A fresh, unbuilt instance in a new worker process, with the check's deadline and memory limit.
   std::unique_ptr<Backend> launch(const LaunchLimits& limits) const;
 
   const std::filesystem::path& path() const { return path_; }  // absolute
@@ -47,6 +47,7 @@ struct FailureReport {
   Outcome outcome = Outcome::Fail;  // crash, timeout or fail
   std::string detail;               // one line
   std::optional<Ray> ray;           // the ray being traced, when known
+  std::string output;               // what the plugin printed (captured by its worker, truncated)
 };
 
 // What the exception a plugin call threw means for the check. Rethrows what is not a plugin failure (bad

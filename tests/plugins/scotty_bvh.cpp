@@ -99,16 +99,16 @@ struct BBox {
   bool hit(const Ray& ray, double times[2]) const {
     double t0 = times[0], t1 = times[1];
     for (int a = 0; a < 3; ++a) {
+#if BUG(6)
+      static const Slab slabs[3] = {slab_negative, nullptr, slab_positive};
+      slabs[(ray.dir[a] > 0.0) - (ray.dir[a] < 0.0) + 1](min[a], max[a], ray.point[a], ray.inv_dir[a], t0, t1);
+#else
       // A ray parallel to the slab is inside it or not at all. Left to the division, an origin exactly on a
       // face gives 0 * inf = NaN, and the slab would cut the ray away.
       if (ray.dir[a] == 0.0) {
         if (ray.point[a] < min[a] || ray.point[a] > max[a]) return false;
         continue;
       }
-#if BUG(6)
-      static const Slab slabs[3] = {slab_negative, nullptr, slab_positive};
-      slabs[(ray.dir[a] > 0.0) - (ray.dir[a] < 0.0) + 1](min[a], max[a], ray.point[a], ray.inv_dir[a], t0, t1);
-#else
       double near = (min[a] - ray.point[a]) * ray.inv_dir[a];
       double far = (max[a] - ray.point[a]) * ray.inv_dir[a];
 #if !BUG(3)
