@@ -71,21 +71,19 @@ int run_grade_command(const GradeOptions& opt) {
   settings.image_dir = opt.out;
   settings.twinray = running_executable();
 
-  // Check lines go to stdout as they finish; the progress line (stderr, terminals only) is cleared first.
+  // The header once the suite and plugin are loaded; check lines on stdout as they finish, the progress line
+  // (stderr, terminals only) cleared before each.
   std::optional<Progress> progress;
-  bool header_printed = false;
-  settings.on_check = [&](const grade::CheckResult& result, std::size_t done, std::size_t total) {
-    if (!progress) progress.emplace("grade", total);
+  settings.on_start = [&](const grade::Scorecard& card, std::size_t total) {
+    fmt::print("{}", grade::terminal_header(card, total));
+    std::fflush(stdout);
+    progress.emplace("grade", total);
+  };
+  settings.on_check = [&](const grade::CheckResult& result, std::size_t, std::size_t) {
     if (progress->enabled()) fmt::print(stderr, "\r\033[K");
     fmt::print("{}", grade::terminal_check_line(result));
     std::fflush(stdout);
     progress->advance();
-    (void)done;
-  };
-  settings.on_start = [&](const grade::Scorecard& card, std::size_t total) {
-    fmt::print("{}", grade::terminal_header(card, total));
-    std::fflush(stdout);
-    header_printed = true;
   };
 
   grade::Scorecard card;
@@ -95,7 +93,6 @@ int run_grade_command(const GradeOptions& opt) {
     return report_bad_input("grade", e.what());
   }
   if (progress) progress->finish();
-  if (!header_printed) fmt::print("{}", grade::terminal_header(card, card.checks.size()));
   fmt::print("{}", grade::terminal_totals(card));
 
   if (!card.images.empty()) std::filesystem::create_directories(opt.out);

@@ -135,46 +135,6 @@ void BvhBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occ
   for (const std::uint32_t i : morton_ray_order(rays, bounds)) occluded[i] = this->occluded(rays[i], stats) ? 1 : 0;
 }
 
-namespace {
-
-struct RecordingObserver {
-  std::vector<BvhVisit>* visits;
-  void enter(std::uint32_t node, float tmax) const { visits->push_back({node, tmax}); }
-};
-
-}  // namespace
-
-bool BvhBackend::intersect_traced(const Ray& ray, Hit& hit, std::vector<BvhVisit>& visits, QueryStats* stats) const {
-  visits.clear();
-  if (stats) ++stats->queries;
-  hit = Hit{};
-  if (!is_valid_ray(ray)) return false;
-  const BvhView view{nodes_, &prims_};
-  const RecordingObserver observer{&visits};
-  switch (kinds_) {
-    case Kinds::Triangles: return bvh_intersect<true, false>(view, ray, hit, stats, observer);
-    case Kinds::Spheres: return bvh_intersect<false, true>(view, ray, hit, stats, observer);
-    case Kinds::Mixed: return bvh_intersect<true, true>(view, ray, hit, stats, observer);
-    case Kinds::None: break;
-  }
-  return false;
-}
-
-bool BvhBackend::occluded_traced(const Ray& ray, std::vector<BvhVisit>& visits, QueryStats* stats) const {
-  visits.clear();
-  if (stats) ++stats->queries;
-  if (!is_valid_ray(ray)) return false;
-  const BvhView view{nodes_, &prims_};
-  const RecordingObserver observer{&visits};
-  switch (kinds_) {
-    case Kinds::Triangles: return bvh_occluded<true, false>(view, ray, stats, observer);
-    case Kinds::Spheres: return bvh_occluded<false, true>(view, ray, stats, observer);
-    case Kinds::Mixed: return bvh_occluded<true, true>(view, ray, stats, observer);
-    case Kinds::None: break;
-  }
-  return false;
-}
-
 std::unique_ptr<Backend> make_bvh_backend(const BvhBuildOptions& options) { return std::make_unique<BvhBackend>(options); }
 
 }  // namespace twinray

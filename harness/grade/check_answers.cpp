@@ -36,7 +36,7 @@ struct RaySet {
 RaySet rays_for(CheckContext& ctx) {
   const CheckSpec& spec = ctx.spec;
   const Scene& scene = ctx.scene.scene();
-  const std::size_t count = spec.count != 0 ? spec.count : kDefaultSpecialRays;
+  const std::size_t count = ctx.count_or(kDefaultSpecialRays);
   RaySet set;
   switch (spec.category) {
     case Category::ClosestHit: {
@@ -44,30 +44,27 @@ RaySet rays_for(CheckContext& ctx) {
       std::vector<crosscheck::RayKind> kinds = spec.rays.empty() ? std::vector{crosscheck::RayKind::Camera} : spec.rays;
       if (spec.image) {
         // The image's pixels first; the other kinds follow.
-        PixelRays pixels = camera_pixel_rays(scene, spec.count != 0 ? spec.count : kDefaultKindRays);
+        PixelRays pixels = camera_pixel_rays(scene, ctx.count_or(kDefaultKindRays));
         set.image_width = pixels.width;
         set.image_height = pixels.height;
         set.rays = std::move(pixels.rays);
         std::erase(kinds, crosscheck::RayKind::Camera);
       }
       for (const crosscheck::RayKind k : kinds) {
-        const std::vector<Ray> some = kind_rays(k, scene, ctx.scene.reference("embree"),
-                                                spec.count != 0 ? spec.count : kDefaultKindRays, spec.seed);
+        const std::vector<Ray> some =
+            kind_rays(k, scene, ctx.scene.reference("embree"), ctx.count_or(kDefaultKindRays), spec.seed);
         set.rays.insert(set.rays.end(), some.begin(), some.end());
       }
       break;
     }
     case Category::AnyHit:
       set.queries = Queries::Any;
-      set.rays = ctx.rays_of_kinds({crosscheck::RayKind::Shadow}, kDefaultKindRays);
+      set.rays = ctx.rays_of_kinds({crosscheck::RayKind::Shadow}, ctx.count_or(kDefaultKindRays));
       break;
     case Category::RayInterval: {
       // count is the number of variants; each base ray that hits gives four.
-      CheckSpec base = spec;
-      base.count = std::max<std::size_t>(1, count / 4);
-      const CheckContext base_ctx{base, ctx.scene, ctx.env, ctx.deadline};
-      const std::vector<Ray> rays = base_ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Shadow},
-                                                           base.count);
+      const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Shadow},
+                                                      std::max<std::size_t>(1, count / 4));
       const Answers first = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Closest);
       set.rays = interval_rays(rays, first.hits);
       break;

@@ -23,7 +23,7 @@ CheckVerdict run_build_check(CheckContext& ctx) {
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const BuildStats stats = plugin->build_stats();
 
-  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform}, kDefaultProbeRays);
+  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform}, ctx.count_or(kDefaultProbeRays));
   const Answers mine = trace_rays(*plugin, rays, Queries::Both);
   const Answers expected = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Both);
   const Judgement j = judge(ctx.scene, rays, mine, expected,

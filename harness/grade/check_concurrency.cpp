@@ -21,6 +21,7 @@ namespace twinray::grade {
 namespace {
 
 constexpr std::size_t kDefaultRays = 20000;
+constexpr std::size_t kDefaultDeterminismRays = 10000;  // per kind
 // Rays per call: small enough that threads interleave many times per round, large enough that the cost of
 // reaching the plugin's worker stays small against the work.
 constexpr std::size_t kChunk = 256;
@@ -63,7 +64,7 @@ void trace_rotated(const Backend& backend, std::span<const Ray> rays, std::size_
 }  // namespace
 
 CheckVerdict run_thread_safety_check(CheckContext& ctx) {
-  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Diffuse}, kDefaultRays);
+  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Diffuse}, ctx.count_or(kDefaultRays));
   const std::unique_ptr<Backend> plugin = ctx.built_plugin();
   Answers single;
   trace_rotated(*plugin, rays, 0, single);
@@ -118,7 +119,8 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
 }
 
 CheckVerdict run_determinism_check(CheckContext& ctx) {
-  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform, crosscheck::RayKind::Diffuse}, 10000);
+  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform, crosscheck::RayKind::Diffuse},
+                                                  ctx.count_or(kDefaultDeterminismRays));
   const std::unique_ptr<Backend> a = ctx.built_plugin();
   const Answers first = trace_rays(*a, rays, Queries::Both);
   const Answers again = trace_rays(*a, rays, Queries::Both);

@@ -52,7 +52,8 @@ double per_ray(std::uint64_t total, std::size_t rays) {
 void require(std::optional<double> limit, bool at_most, double value, const char* what, std::vector<std::string>& failed) {
   if (!limit) return;
   if (at_most ? value <= *limit : value >= *limit) return;
-  failed.push_back(fmt::format("{} {:.3g} {} {:.3g}", what, value, at_most ? "above the limit" : "below the minimum", *limit));
+  failed.push_back(
+      fmt::format("{} {:.3g} {} {:.3g}", what, value, at_most ? "above the limit" : "below the minimum", *limit));
 }
 
 std::string join(const std::vector<std::string>& parts) {
@@ -65,7 +66,7 @@ std::string join(const std::vector<std::string>& parts) {
 
 CheckVerdict run_performance_check(CheckContext& ctx) {
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Diffuse},
-                                                  kDefaultPerformanceRays);
+                                                  ctx.count_or(kDefaultPerformanceRays));
   const std::unique_ptr<Backend> plugin = ctx.built_plugin();
   const double build_seconds = plugin->build_stats().build_seconds;
   const Backend& bvh = ctx.scene.reference("bvh");
@@ -105,7 +106,8 @@ CheckVerdict run_performance_check(CheckContext& ctx) {
   require(ctx.spec.thresholds.min_speed_vs_bvh, false, vs_bvh, "speed vs bvh", failed);
   require(ctx.spec.thresholds.min_speed_vs_embree_fast, false, vs_fast, "speed vs embree-fast", failed);
   require(ctx.spec.thresholds.max_build_seconds, true, build_seconds, "build seconds", failed);
-  if (j.wrong_total() != 0) failed.insert(failed.begin(), fmt::format("{} of the timed rays answered wrong", j.wrong_total()));
+  if (j.wrong_total() != 0)
+    failed.insert(failed.begin(), fmt::format("{} of the timed rays answered wrong", j.wrong_total()));
   v.passed = failed.empty();
   const std::string figures = fmt::format("{:.3g} Mrays/s, {:.2f}x bvh, {:.2f}x embree-fast, build {:.3f} s",
                                           mine.rays_per_second * 1e-6, vs_bvh, vs_fast, build_seconds);
@@ -119,11 +121,12 @@ CheckVerdict run_tree_quality_check(CheckContext& ctx) {
   const double reported = plugin->build_stats().sah_cost;
   const double reference = reference_sah_cost(ctx.scene.geometry());
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Diffuse},
-                                                  kDefaultTreeRays);
+                                                  ctx.count_or(kDefaultTreeRays));
   const bool counted = ctx.env.plugin.traits().counts_traversal;
   const Answers mine = trace_rays(*plugin, rays, Queries::Closest);
   const Answers theirs = trace_rays(ctx.scene.reference("bvh"), rays, Queries::Closest);
-  const double nodes = per_ray(mine.stats.nodes_visited, rays.size()), prims = per_ray(mine.stats.primitives_tested, rays.size());
+  const double nodes = per_ray(mine.stats.nodes_visited, rays.size());
+  const double prims = per_ray(mine.stats.primitives_tested, rays.size());
   const double ref_nodes = per_ray(theirs.stats.nodes_visited, rays.size());
   const double ref_prims = per_ray(theirs.stats.primitives_tested, rays.size());
   const double sah_ratio = reference > 0.0 ? reported / reference : 0.0;
@@ -142,8 +145,10 @@ CheckVerdict run_tree_quality_check(CheckContext& ctx) {
   // Messages built with fmt: GCC 12 reports a bogus -Warray-bounds for a string literal pushed into a vector.
   std::vector<std::string> failed;
   const Thresholds& t = ctx.spec.thresholds;
-  if (t.max_sah_ratio && !(reported > 0.0)) failed.push_back(fmt::format("the plugin reports no SAH cost ({})", "twinray_build_stats::sah_cost"));
-  else require(t.max_sah_ratio, true, sah_ratio, "SAH cost ratio", failed);
+  if (t.max_sah_ratio && !(reported > 0.0))
+    failed.push_back(fmt::format("the plugin reports no SAH cost ({})", "twinray_build_stats::sah_cost"));
+  else
+    require(t.max_sah_ratio, true, sah_ratio, "SAH cost ratio", failed);
   if ((t.max_nodes_per_ray_ratio || t.max_primitives_per_ray_ratio) && !counted) {
     failed.push_back(fmt::format("the plugin does not count its traversal ({})", "TWINRAY_PLUGIN_COUNTS_TRAVERSAL"));
   } else {

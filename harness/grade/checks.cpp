@@ -42,9 +42,8 @@ std::string CheckContext::grade_command() const {
                      shell_quote(suite), shell_quote(spec.name));
 }
 
-std::vector<Ray> CheckContext::rays_of_kinds(std::vector<crosscheck::RayKind> fallback, std::size_t default_count) const {
+std::vector<Ray> CheckContext::rays_of_kinds(const std::vector<crosscheck::RayKind>& fallback, std::size_t count) const {
   const std::vector<crosscheck::RayKind>& kinds = spec.rays.empty() ? fallback : spec.rays;
-  const std::size_t count = spec.count != 0 ? spec.count : default_count;
   std::vector<Ray> rays;
   for (const crosscheck::RayKind k : kinds) {
     const std::vector<Ray> some = kind_rays(k, scene.scene(), scene.reference("embree"), count, spec.seed);

@@ -24,7 +24,6 @@ struct CheckEnvironment {
   const PluginLauncher& plugin;
   std::string twinray = "twinray";  // how reproduce lines start the program (the running executable's path)
   bool images = false;               // render disagreement images (CheckVerdict::image)
-  std::filesystem::path image_dir;   // the folder they will be written to, for their names
 };
 
 struct CheckContext {
@@ -42,8 +41,10 @@ struct CheckContext {
   std::string trace_command(const Ray& ray) const;
   // `twinray grade PLUGIN --suite SUITE --check NAME`: reruns the whole check.
   std::string grade_command() const;
-  // The rays of the check's kinds (its "rays", or `fallback` when the suite gives none), `count` per kind.
-  std::vector<Ray> rays_of_kinds(std::vector<crosscheck::RayKind> fallback, std::size_t default_count) const;
+  // The check's ray count ("count"), or `fallback` when the suite gives none.
+  std::size_t count_or(std::size_t fallback) const { return spec.count != 0 ? spec.count : fallback; }
+  // `count` rays of each of the check's kinds ("rays", or `fallback` when the suite gives none).
+  std::vector<Ray> rays_of_kinds(const std::vector<crosscheck::RayKind>& fallback, std::size_t count) const;
 };
 
 struct CheckVerdict {

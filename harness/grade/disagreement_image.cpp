@@ -17,8 +17,9 @@ Image disagreement_image(int width, int height, std::span<const Ray> rays, std::
                          std::span<const WrongAnswer> wrong) {
   Image image(width, height, 3);
   const std::size_t pixels = image.pixel_count();
+  const auto w = static_cast<std::size_t>(width);
   for (std::size_t p = 0; p < pixels && p < rays.size(); ++p) {
-    const int x = static_cast<int>(p % static_cast<std::size_t>(width)), y = static_cast<int>(p / static_cast<std::size_t>(width));
+    const int x = static_cast<int>(p % w), y = static_cast<int>(p / w);
     const Hit& h = reference[p];
     if (!h.found()) {
       for (int c = 0; c < 3; ++c) image.at(x, y, c) = kBackground[c];
@@ -29,9 +30,9 @@ Image disagreement_image(int width, int height, std::span<const Ray> rays, std::
     const float grey = 0.04f + 0.6f * (std::isfinite(cosine) ? std::min(cosine, 1.0f) : 0.0f);
     for (int c = 0; c < 3; ++c) image.at(x, y, c) = grey;
   }
-  for (const WrongAnswer& w : wrong) {
-    if (w.ray >= pixels) continue;
-    const int x = static_cast<int>(w.ray % static_cast<std::size_t>(width)), y = static_cast<int>(w.ray / static_cast<std::size_t>(width));
+  for (const WrongAnswer& wrong_answer : wrong) {
+    if (wrong_answer.ray >= pixels) continue;
+    const int x = static_cast<int>(wrong_answer.ray % w), y = static_cast<int>(wrong_answer.ray / w);
     for (int c = 0; c < 3; ++c) image.at(x, y, c) = kWrong[c];
   }
   const int factor = std::max(1, kMinImageSide / std::max({width, height, 1}));

@@ -78,7 +78,7 @@ Scorecard run_grade(const GradeSettings& settings) {
   std::map<std::string, std::unique_ptr<GradeScene>> scenes;
   std::map<std::string, const CheckResult*> done;  // by name; points into card.checks (reserved below)
   card.checks.reserve(checks.size());
-  const CheckEnvironment env{suite, plugin, settings.twinray, !settings.image_dir.empty(), settings.image_dir};
+  const CheckEnvironment env{suite, plugin, settings.twinray, !settings.image_dir.empty()};
 
   for (std::size_t i = 0; i < checks.size(); ++i) {
     const CheckSpec& spec = *checks[i];

@@ -30,10 +30,12 @@ std::string describe_failure(const PluginFailure& f) {
   const std::string extra = f.detail.empty() ? "" : " (" + f.detail + ")";
   if (f.kind == PluginFailureKind::Timeout) return "no answer within the time limit" + where + extra;
   if (f.cause == "signal") return fmt::format("crashed with {}{}", f.signal_name, where);
-  if (f.cause == "abort") return fmt::format("aborted ({}){}{}", f.signal_name.empty() ? "SIGABRT" : f.signal_name, where, extra);
+  if (f.cause == "abort")
+    return fmt::format("aborted ({}){}{}", f.signal_name.empty() ? "SIGABRT" : f.signal_name, where, extra);
   if (f.cause == "exit") return fmt::format("called exit({}){}", f.exit_code, where);
   if (f.cause == "out-of-memory") return "ran out of memory" + where + extra;
-  if (f.cause == "sandbox") return fmt::format("stopped by the sandbox: system call {}{}", f.syscall.empty() ? "?" : f.syscall, where);
+  if (f.cause == "sandbox")
+    return fmt::format("stopped by the sandbox: system call {}{}", f.syscall.empty() ? "?" : f.syscall, where);
   if (f.cause == "exception") return "let a C++ exception escape" + where + extra;
   if (f.cause == "bad-hit") return "reported a hit on a primitive that does not exist" + where + extra;
   if (f.cause == "load") return "died while loading" + extra;

@@ -269,7 +269,8 @@ Suite parse_suite_manifest(const std::filesystem::path& manifest_path) {
   suite.manifest = manifest;
   suite.dir = manifest.parent_path();
   suite.name = root.member("suite").as_string();
-  if (!valid_check_name(suite.name)) root.member("suite").fail("a suite name is 1 to 80 characters of a-z, 0-9, '-', '_' and '.'");
+  if (!valid_check_name(suite.name))
+    root.member("suite").fail("a suite name is 1 to 80 characters of a-z, 0-9, '-', '_' and '.'");
   if (auto n = root.optional_member("description")) suite.description = n->as_string();
   Defaults defaults;
   if (auto n = root.optional_member("defaults")) defaults = parse_defaults(*n);
