@@ -5,6 +5,7 @@
 #include "backends/embree/embree_backend.h"
 #include "backends/plugin/isolated_plugin_backend.h"
 #include "backends/plugin/plugin_backend.h"
+#include "backends/wide/wide_backend.h"
 
 #include <fmt/core.h>
 #include <fmt/ranges.h>
@@ -26,9 +27,10 @@ bool is_plugin_name(std::string_view name) {
 }
 }  // namespace
 
-std::vector<std::string> backend_names() { return {"bvh", "embree", "embree-fast", "brute"}; }
+std::vector<std::string> backend_names() { return {"bvh8", "bvh", "embree", "embree-fast", "brute"}; }
 
 std::unique_ptr<Backend> make_backend(std::string_view name) {
+  if (name == "bvh8") return make_wide_backend();
   if (name == "bvh") return make_bvh_backend();
   if (name == "embree") return make_embree_backend(/*robust=*/true);
   if (name == "embree-fast") return make_embree_backend(/*robust=*/false);

@@ -1,7 +1,8 @@
 #pragma once
 // Backends by name: the one place that knows every implementation.
 //
-//   bvh           hand-written binned SAH BVH (backends/bvh)
+//   bvh8          the same SAH tree collapsed into 8-wide SIMD nodes, kernels chosen at run time (backends/wide)
+//   bvh           hand-written binned SAH BVH, binary, 32-byte nodes: the textbook reference (backends/bvh)
 //   embree        Embree 3, RTC_SCENE_FLAG_ROBUST: the correctness reference
 //   embree-fast   Embree 3, default flags: the speed reference
 //   brute         a loop over every primitive: the oracle

@@ -7,10 +7,11 @@
 //   --twinray_series_threads=LIST    thread counts for the procedural scale series (default "1": the series
 //                                    is about scaling with N, and 28 scenes at two thread counts would
 //                                    double the run time)
-//   --twinray_backends=LIST          default embree-fast,bvh,embree,brute (embree-fast always runs first)
+//   --twinray_backends=LIST          default embree-fast,bvh8,bvh,embree,brute (embree-fast always runs first)
 //   --twinray_brute_max_triangles=N  brute force only on scenes up to N triangles (default 1024)
 //   --twinray_meshes=0               leave out the shared meshes
-// The shared meshes are read from $TWINRAY_SHARED/data/meshes (scenes whose file is missing are left out).
+// The shared meshes are read from $TWINRAY_SHARED/data/meshes (scenes whose file is missing are left out),
+// and with them the interior views scenes/sponza-interior.json and scenes/dragon-closeup.json.
 
 #include "bench/bench_registration.h"
 
@@ -36,7 +37,7 @@ struct BenchOptions {
   std::size_t rays = std::size_t{1} << 16;
   std::vector<int> threads;
   std::vector<int> series_threads;
-  std::vector<std::string> backends = {"embree-fast", "bvh", "embree", "brute"};
+  std::vector<std::string> backends = {"embree-fast", "bvh8", "bvh", "embree", "brute"};
   std::size_t brute_max_triangles = 1024;
   bool meshes = true;
 };
@@ -83,8 +84,8 @@ BenchOptions take_twinray_flags(int& argc, char** argv) {
 }
 
 std::size_t expected_triangles(const BenchSceneSpec& spec) {
-  // Meshes: never brute force (the smallest shared mesh has tens of thousands of triangles).
-  return spec.family == "mesh" ? static_cast<std::size_t>(-1) : spec.target_triangles;
+  // Meshes and views: never brute force (the smallest shared mesh has tens of thousands of triangles).
+  return spec.family == "mesh" || spec.family == "view" ? static_cast<std::size_t>(-1) : spec.target_triangles;
 }
 
 void register_benchmarks(const BenchOptions& o) {
@@ -101,7 +102,7 @@ void register_benchmarks(const BenchOptions& o) {
           ->Unit(benchmark::kMillisecond);
     for (BenchRayKind kind : kBenchRayKinds)
       for (QueryKind query : {QueryKind::Closest, QueryKind::Any})
-        for (int threads : spec.family == "mesh" ? o.threads : o.series_threads)
+        for (int threads : spec.family == "mesh" || spec.family == "view" ? o.threads : o.series_threads)
           for (const std::string& b : backends) {
             const TraceCase c{spec, b, kind, query, threads};
             benchmark::RegisterBenchmark(

@@ -81,6 +81,13 @@ std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::op
       if (std::filesystem::exists(path)) specs.push_back({name, "mesh", 0, path});
       else fmt::print(stderr, "twinray_bench: {} not found, scene '{}' left out\n", path.string(), name);
     }
+    // Interior views of the same meshes: scene files with their own camera and lights, which read the
+    // meshes through $TWINRAY_SHARED.
+    for (const char* name : {"sponza-interior", "dragon-closeup"}) {
+      const std::filesystem::path path = std::filesystem::path(TWINRAY_SOURCE_DIR) / "scenes" / (std::string(name) + ".json");
+      if (std::filesystem::exists(path)) specs.push_back({name, "view", 0, path});
+      else fmt::print(stderr, "twinray_bench: {} not found, scene '{}' left out\n", path.string(), name);
+    }
   }
   return specs;
 }
@@ -95,7 +102,7 @@ const Scene& scene_for(const BenchSceneSpec& spec) {
   c.backends.clear();
   c.rays.clear();
   c.scene.reset();
-  if (spec.family == "mesh") {
+  if (spec.family == "mesh" || spec.family == "view") {
     c.scene = std::make_unique<Scene>(load_scene(spec.file));
   } else {
     const BenchFamily family = *parse_bench_family(spec.family);

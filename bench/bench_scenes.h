@@ -27,7 +27,8 @@ inline constexpr const char* kReferenceBackend = "embree-fast";
 
 struct BenchSceneSpec {
   std::string name;                       // "sphere-64k", "bunny", ... (appears in benchmark names)
-  std::string family;                     // sphere, soup, terrain, hairball, or "mesh"
+  std::string family;                     // sphere, soup, terrain, hairball, "mesh" (a bare shared mesh) or
+                                          // "view" (a scene file of scenes/ with its own camera and lights)
   std::size_t target_triangles = 0;       // procedural: the requested size
   std::filesystem::path file;             // mesh: the file to load
 };
@@ -42,7 +43,8 @@ enum class QueryKind { Closest, Any };
 const char* to_string(QueryKind query);
 
 // The scale series (every family at 1k, 4k, ..., max_triangles, powers of 4) followed by the meshes of
-// $TWINRAY_SHARED/data/meshes that exist (bunny, dragon, sponza).
+// $TWINRAY_SHARED/data/meshes that exist (bunny, dragon, sponza) and, with them, the interior views
+// scenes/sponza-interior.json and scenes/dragon-closeup.json.
 std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared);
 
 // Rays per ray set (same for every backend and thread count).

@@ -27,7 +27,7 @@ struct ConvergeCommandOptions {
   std::string scene;
   std::string reference;
   std::optional<int> reference_spp;
-  std::string backends = "bvh,embree";
+  std::string backends = "bvh8,embree";
   std::string strategies = "mis,bsdf,light";
   double budget_seconds = 10.0;
   std::string out;

@@ -16,7 +16,7 @@ namespace {
 
 struct CrosscheckOptions {
   std::string scene;
-  std::string backends = "bvh,embree";
+  std::string backends = "bvh8,embree";
   // Signed on purpose: CLI11 would wrap "-5" into a huge unsigned count.
   std::int64_t rays = 100000;
   std::string kinds = "camera,uniform,diffuse,shadow";
@@ -61,7 +61,7 @@ void add_crosscheck_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("scene", opt->scene, "Scene (.json) or bare mesh (.obj, .ply)")->required();
   cmd->add_option("--backends", opt->backends,
                   "Comma-separated backends; the first is the baseline the others are compared with "
-                  "(bvh, embree, embree-fast, brute, plugin:PATH)")
+                  "(bvh8, bvh, embree, embree-fast, brute, plugin:PATH)")
       ->capture_default_str();
   cmd->add_option("--rays", opt->rays, "Rays per kind")->capture_default_str();
   cmd->add_option("--kinds", opt->kinds, "Ray kinds: camera, uniform, diffuse, shadow")->capture_default_str();

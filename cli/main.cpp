@@ -11,7 +11,7 @@
 
 int main(int argc, char** argv) {
   using namespace twinray::cli;
-  CLI::App app{"twinray: a path tracer over interchangeable ray-intersection backends (bvh, embree, embree-fast, brute)"};
+  CLI::App app{"twinray: a path tracer over interchangeable ray-intersection backends (bvh8, bvh, embree, embree-fast, brute)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "twinray 0.1.0");
 

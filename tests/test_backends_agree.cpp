@@ -48,33 +48,36 @@ std::vector<Named> scenes() {
   return v;
 }
 
-TEST(BackendsAgree, BvhAndEmbreeRobustHaveNoGenuineMismatch) {
+TEST(BackendsAgree, BvhTreesAndEmbreeRobustHaveNoGenuineMismatch) {
   const ScopedFlushDenormals ftz;
   for (Named& named : scenes()) {
     const Scene scene = wrap(std::move(named.geometry));
-    const crosscheck::GeometryIndex index(scene.geometry);
-    auto bvh = make_backend("bvh");
-    auto embree = make_backend("embree");
-    bvh->build(scene.geometry);
-    embree->build(scene.geometry);
-    for (const crosscheck::RayKind kind : crosscheck::kAllRayKinds) {
-      const std::vector<Ray> rays = crosscheck::generate_rays(kind, scene, *bvh, 6000, 3);
-      ASSERT_GT(rays.size(), 1000u) << named.name << " " << crosscheck::to_string(kind);
-      std::vector<Hit> ha(rays.size()), hb(rays.size());
-      std::vector<std::uint8_t> oa(rays.size()), ob(rays.size());
-      bvh->intersect(rays, ha);
-      embree->intersect(rays, hb);
-      bvh->occluded(rays, oa);
-      embree->occluded(rays, ob);
-      const crosscheck::PairComparison c = crosscheck::compare(index, rays, ha, hb, oa, ob);
-      EXPECT_EQ(c.genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
-      EXPECT_EQ(c.occlusion_genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
-      // Ambiguities are rare: random rays almost never graze an edge within ~1e-5 of the scene size.
-      EXPECT_GE(c.identical_fraction(), 0.999) << named.name << " " << crosscheck::to_string(kind);
-      // Rays leaving a convex or flat surface (diffuse bounces, shadow segments toward geometry 0) may
-      // legitimately all miss; rays from the camera and through the bounds must find something.
-      if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {
-        EXPECT_GT(c.hits_a, 0u) << named.name << " " << crosscheck::to_string(kind);
+    for (const char* tree : {"bvh", "bvh8"}) {
+      SCOPED_TRACE(tree);
+      const crosscheck::GeometryIndex index(scene.geometry);
+      auto bvh = make_backend(tree);
+      auto embree = make_backend("embree");
+      bvh->build(scene.geometry);
+      embree->build(scene.geometry);
+      for (const crosscheck::RayKind kind : crosscheck::kAllRayKinds) {
+        const std::vector<Ray> rays = crosscheck::generate_rays(kind, scene, *bvh, 6000, 3);
+        ASSERT_GT(rays.size(), 1000u) << named.name << " " << crosscheck::to_string(kind);
+        std::vector<Hit> ha(rays.size()), hb(rays.size());
+        std::vector<std::uint8_t> oa(rays.size()), ob(rays.size());
+        bvh->intersect(rays, ha);
+        embree->intersect(rays, hb);
+        bvh->occluded(rays, oa);
+        embree->occluded(rays, ob);
+        const crosscheck::PairComparison c = crosscheck::compare(index, rays, ha, hb, oa, ob);
+        EXPECT_EQ(c.genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
+        EXPECT_EQ(c.occlusion_genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
+        // Ambiguities are rare: random rays almost never graze an edge within ~1e-5 of the scene size.
+        EXPECT_GE(c.identical_fraction(), 0.999) << named.name << " " << crosscheck::to_string(kind);
+        // Rays leaving a convex or flat surface (diffuse bounces, shadow segments toward geometry 0) may
+        // legitimately all miss; rays from the camera and through the bounds must find something.
+        if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {
+          EXPECT_GT(c.hits_a, 0u) << named.name << " " << crosscheck::to_string(kind);
+        }
       }
     }
   }
@@ -109,7 +112,7 @@ TEST(BackendsAgree, WatertightFromInsideClosedSpheres) {
     std::vector<Ray> brute_rays(all_rays.begin(), all_rays.begin() + static_cast<std::ptrdiff_t>(all_rays.size() / 10));
     brute_rays.insert(brute_rays.end(), toward_vertices.begin(), toward_vertices.end());
     all_rays.insert(all_rays.end(), toward_vertices.begin(), toward_vertices.end());
-    for (const char* name : {"bvh", "brute", "embree", "embree-fast"}) {
+    for (const char* name : {"bvh8", "bvh", "brute", "embree", "embree-fast"}) {
       const std::vector<Ray>& rays = std::string(name) == "brute" ? brute_rays : all_rays;
       auto backend = make_backend(name);
       backend->build(g);

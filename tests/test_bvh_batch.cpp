@@ -1,9 +1,10 @@
-// The bvh backend's batch queries trace rays in the Morton order of their origins (backends/bvh/ray_order.h):
+// The bvh and bvh8 backends' batch queries trace rays in the Morton order of their origins (backends/bvh/ray_order.h):
 // the answers must be exactly those of single-ray calls, slot for slot, with the same statistics, invalid
 // rays included; and the order must be a deterministic permutation that follows the curve.
 
 #include "backends/bvh/bvh_backend.h"
 #include "backends/bvh/ray_order.h"
+#include "backends/wide/wide_backend.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
 #include "ray_test_util.h"
@@ -38,35 +39,38 @@ std::vector<Ray> rays_with_invalid_slots(std::size_t n, std::uint64_t seed) {
 
 TEST(BvhBatch, BatchAnswersEqualSingleRayAnswersSlotForSlot) {
   const SceneGeometry geometry = mixed_spheres_and_triangles(50, 2000, 3);
-  BvhBackend bvh;
-  bvh.build(geometry);
-  const std::vector<Ray> rays = rays_with_invalid_slots(20000, 11);
+  for (const std::unique_ptr<Backend>& tree : {make_bvh_backend(), make_wide_backend()}) {
+    SCOPED_TRACE(std::string(tree->name()));
+    Backend& bvh = *tree;
+    bvh.build(geometry);
+    const std::vector<Ray> rays = rays_with_invalid_slots(20000, 11);
 
-  std::vector<Hit> batch(rays.size());
-  std::vector<std::uint8_t> batch_occluded(rays.size());
-  QueryStats batch_stats, single_stats;
-  bvh.intersect(rays, batch, &batch_stats);
-  bvh.occluded(rays, batch_occluded, &batch_stats);
+    std::vector<Hit> batch(rays.size());
+    std::vector<std::uint8_t> batch_occluded(rays.size());
+    QueryStats batch_stats, single_stats;
+    bvh.intersect(rays, batch, &batch_stats);
+    bvh.occluded(rays, batch_occluded, &batch_stats);
 
-  std::size_t hits = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    Hit h;
-    const bool found = bvh.intersect(rays[i], h, &single_stats);
-    const bool occluded = bvh.occluded(rays[i], &single_stats);
-    hits += found ? 1 : 0;
-    ASSERT_EQ(batch[i].found(), found) << "ray " << i;
-    ASSERT_EQ(batch_occluded[i] != 0, occluded) << "ray " << i;
-    if (!found) continue;
-    EXPECT_EQ(batch[i].geom_id, h.geom_id) << "ray " << i;
-    EXPECT_EQ(batch[i].prim_id, h.prim_id) << "ray " << i;
-    EXPECT_TRUE(same_bits(batch[i].t, h.t) && same_bits(batch[i].u, h.u) && same_bits(batch[i].v, h.v) &&
-                same_bits(batch[i].ng.x, h.ng.x) && same_bits(batch[i].ng.y, h.ng.y) && same_bits(batch[i].ng.z, h.ng.z))
-        << "ray " << i;
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      Hit h;
+      const bool found = bvh.intersect(rays[i], h, &single_stats);
+      const bool occluded = bvh.occluded(rays[i], &single_stats);
+      hits += found ? 1 : 0;
+      ASSERT_EQ(batch[i].found(), found) << "ray " << i;
+      ASSERT_EQ(batch_occluded[i] != 0, occluded) << "ray " << i;
+      if (!found) continue;
+      EXPECT_EQ(batch[i].geom_id, h.geom_id) << "ray " << i;
+      EXPECT_EQ(batch[i].prim_id, h.prim_id) << "ray " << i;
+      EXPECT_TRUE(same_bits(batch[i].t, h.t) && same_bits(batch[i].u, h.u) && same_bits(batch[i].v, h.v) &&
+                  same_bits(batch[i].ng.x, h.ng.x) && same_bits(batch[i].ng.y, h.ng.y) && same_bits(batch[i].ng.z, h.ng.z))
+          << "ray " << i;
+    }
+    EXPECT_GT(hits, rays.size() / 4);  // a test that hits nothing proves nothing
+    EXPECT_EQ(batch_stats.queries, single_stats.queries);
+    EXPECT_EQ(batch_stats.nodes_visited, single_stats.nodes_visited);
+    EXPECT_EQ(batch_stats.primitives_tested, single_stats.primitives_tested);
   }
-  EXPECT_GT(hits, rays.size() / 4);  // a test that hits nothing proves nothing
-  EXPECT_EQ(batch_stats.queries, single_stats.queries);
-  EXPECT_EQ(batch_stats.nodes_visited, single_stats.nodes_visited);
-  EXPECT_EQ(batch_stats.primitives_tested, single_stats.primitives_tested);
 }
 
 TEST(BvhBatch, MortonOrderIsADeterministicPermutationAlongTheCurve) {

@@ -2,6 +2,7 @@
 // coverage, kind separation, depth cap and SAH quality against an object-median build.
 
 #include "backends/bvh/bvh_backend.h"
+#include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
 
 #include <gtest/gtest.h>
@@ -230,6 +231,33 @@ TEST(BvhInvariants, EmptySceneBuildsAndMisses) {
   Hit hit;
   EXPECT_FALSE(bvh.intersect(Ray{}, hit));
   EXPECT_FALSE(bvh.occluded(Ray{}));
+}
+
+
+// Any hit visits children in the closest-hit order and stops at its first hit, so on every ray it tests
+// at most the boxes and primitives the closest-hit query tests: an any-hit query can never cost more.
+TEST(BvhInvariants, AnyHitNeverDoesMoreWorkThanClosestHit) {
+  const SceneGeometry g = mixed_spheres_and_triangles(30, 3000, 4);
+  BvhBackend bvh;
+  bvh.build(g);
+  Rng rng(8, 1);
+  const auto uniform = [&] { return 3.0f * rng.next_float() - 1.5f; };
+  std::size_t hits = 0, cheaper = 0;
+  for (int i = 0; i < 5000; ++i) {
+    Ray ray;
+    ray.org = {uniform(), uniform(), uniform()};
+    ray.dir = glm::vec3(uniform(), uniform(), uniform()) - ray.org;
+    if (ray.dir == glm::vec3(0.0f)) ray.dir.x = 1.0f;
+    QueryStats closest, any;
+    Hit hit;
+    hits += bvh.intersect(ray, hit, &closest) ? 1 : 0;
+    bvh.occluded(ray, &any);
+    ASSERT_LE(any.nodes_visited, closest.nodes_visited) << "ray " << i;
+    ASSERT_LE(any.primitives_tested, closest.primitives_tested) << "ray " << i;
+    cheaper += any.nodes_visited < closest.nodes_visited ? 1 : 0;
+  }
+  EXPECT_GT(hits, 1000u);
+  EXPECT_GT(cheaper, 100u);  // and it does stop early
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
-// The bvh backend against the brute-force oracle: on every ray, the same hit (geometry id, primitive id) and
-// bit-identical t, u, v and normal, for closest hits and any hits, over scenes chosen to provoke ties,
-// exact edge and vertex crossings, signed-zero directions and mixed primitive kinds.
+// The bvh and bvh8 backends against the brute-force oracle: on every ray, the same hit (geometry id,
+// primitive id) and bit-identical t, u, v and normal, for closest hits and any hits, over scenes chosen to
+// provoke ties, exact edge and vertex crossings, signed-zero directions and mixed primitive kinds. Each
+// tree runs on every instruction set this CPU has (SSE2, AVX2, AVX-512 kernels), so all paths are shown
+// bit-identical to the oracle and therefore to each other.
 
 #include "backends/brute/brute_backend.h"
 #include "backends/bvh/bvh_backend.h"
+#include "backends/wide/wide_backend.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
 #include "ray_test_util.h"
@@ -79,10 +82,31 @@ std::string describe(const Ray& r) {
          ") [" + std::to_string(r.tmin) + ", " + std::to_string(r.tmax) + "]";
 }
 
+std::size_t expect_identical_to_brute(const SceneGeometry& geometry, const std::vector<Ray>& rays, Backend& tree);
+
+// bvh and bvh8, each on every instruction set this CPU can run.
+std::vector<std::pair<std::string, std::unique_ptr<Backend>>> trees_on_every_isa() {
+  std::vector<std::pair<std::string, std::unique_ptr<Backend>>> trees;
+  for (const Isa isa : runnable_isas()) {
+    trees.emplace_back("bvh/" + std::string(to_string(isa)), make_bvh_backend({}, isa));
+    trees.emplace_back("bvh8/" + std::string(to_string(isa)), make_wide_backend({}, isa));
+  }
+  return trees;
+}
+
 // Compares every ray; returns the number of closest hits (so a scene that is never hit cannot pass).
 std::size_t expect_identical(const SceneGeometry& geometry, const std::vector<Ray>& rays) {
+  std::size_t hits = 0;
+  for (auto& [name, tree] : trees_on_every_isa()) {
+    SCOPED_TRACE(name);
+    hits = expect_identical_to_brute(geometry, rays, *tree);
+  }
+  return hits;
+}
+
+std::size_t expect_identical_to_brute(const SceneGeometry& geometry, const std::vector<Ray>& rays, Backend& tree) {
   const std::unique_ptr<Backend> brute = make_brute_backend();
-  const std::unique_ptr<Backend> bvh = make_bvh_backend();
+  Backend* bvh = &tree;
   brute->build(geometry);
   bvh->build(geometry);
   QueryStats brute_stats, bvh_stats;
@@ -179,22 +203,32 @@ TEST(BvhVsBrute, OriginOnSlabPlaneWithZeroDirectionComponent) {
   g.meshes.push_back(mesh);
   BvhBuildOptions one_per_leaf;
   one_per_leaf.max_leaf_size = 1;
-  BvhBackend bvh(one_per_leaf);
-  bvh.build(g);
-  ASSERT_EQ(bvh.build_stats().leaves, 3u);
-  const std::unique_ptr<Backend> brute = make_brute_backend();
-  brute->build(g);
-  for (float zero : {0.0f, -0.0f}) {
-    for (float dz : {-1.0f, 1.0f}) {
-      Ray ray;
-      ray.org = {1.0f, 0.5f, -dz};
-      ray.dir = {zero, zero, dz};
-      Hit a, b;
-      ASSERT_TRUE(brute->intersect(ray, a));
-      ASSERT_TRUE(bvh.intersect(ray, b)) << "dir.x " << zero << " dz " << dz;
-      EXPECT_EQ(a.prim_id, b.prim_id);
-      EXPECT_EQ(b.t, 1.0f);
-      EXPECT_TRUE(bvh.occluded(ray));
+  WideBuildOptions wide_one_per_leaf;
+  wide_one_per_leaf.binary.max_leaf_size = 1;
+  wide_one_per_leaf.collapse.max_leaf_size = 1;
+  for (const Isa isa : runnable_isas()) {
+    BvhBackend bvh_tree(one_per_leaf, isa);
+    WideBackend wide_tree(wide_one_per_leaf, isa);
+    for (Backend* tree : {static_cast<Backend*>(&bvh_tree), static_cast<Backend*>(&wide_tree)}) {
+      Backend& bvh = *tree;
+      SCOPED_TRACE(std::string(bvh.name()) + "/" + std::string(to_string(isa)));
+      bvh.build(g);
+      ASSERT_EQ(bvh.build_stats().leaves, 3u);
+      const std::unique_ptr<Backend> brute = make_brute_backend();
+      brute->build(g);
+      for (float zero : {0.0f, -0.0f}) {
+        for (float dz : {-1.0f, 1.0f}) {
+          Ray ray;
+          ray.org = {1.0f, 0.5f, -dz};
+          ray.dir = {zero, zero, dz};
+          Hit a, b;
+          ASSERT_TRUE(brute->intersect(ray, a));
+          ASSERT_TRUE(bvh.intersect(ray, b)) << "dir.x " << zero << " dz " << dz;
+          EXPECT_EQ(a.prim_id, b.prim_id);
+          EXPECT_EQ(b.t, 1.0f);
+          EXPECT_TRUE(bvh.occluded(ray));
+        }
+      }
     }
   }
 }
@@ -210,7 +244,7 @@ TEST(BvhVsBrute, InvalidRaysMissWithoutTraversal) {
   invalid[4].tmin = 2.0f, invalid[4].tmax = 1.0f;
   invalid[5].tmax = nan;
   invalid[6].tmin = kInf;
-  for (const std::unique_ptr<Backend>& backend : {make_brute_backend(), make_bvh_backend()}) {
+  for (const std::unique_ptr<Backend>& backend : {make_brute_backend(), make_bvh_backend(), make_wide_backend()}) {
     backend->build(g);
     QueryStats stats;
     for (const Ray& ray : invalid) {

@@ -37,7 +37,7 @@ std::ostream& operator<<(std::ostream& os, const Param& p) { return os << p.case
 std::vector<Param> params() {
   std::vector<Param> out;
   for (const StressCase& c : all_cases())
-    for (const char* b : {"bvh", "brute", "embree"})
+    for (const char* b : {"bvh8", "bvh", "brute", "embree"})
       if (!kOpenFindings.count({c.name, b})) out.push_back({c.name, b});
   return out;
 }

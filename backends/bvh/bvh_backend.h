@@ -1,14 +1,16 @@
 #pragma once
 // The hand-written BVH backend: binned SAH tree (bvh_builder.h) over a leaf-ordered private copy of the
-// geometry (primitive_store.h), traversed by bvh_traversal.h. name() == "bvh".
+// geometry (primitive_store.h), traversed by bvh_traversal.inl (bvh_kernels.h). name() == "bvh".
 
 #include "backends/bvh/bvh_build_options.h"
+#include "backends/bvh/bvh_kernels.h"
 #include "backends/bvh/bvh_node.h"
 #include "backends/bvh/primitive_store.h"
 #include "core/backend/backend.h"
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -22,7 +24,9 @@ struct BvhVisit {
 
 class BvhBackend final : public Backend {
  public:
-  explicit BvhBackend(const BvhBuildOptions& options = {});  // throws std::invalid_argument on bad options
+  // Throws std::invalid_argument on bad options. `isa` picks the traversal kernels (tests run every path);
+  // by default the widest this CPU supports, lowered by $TWINRAY_ISA (backends/simd/isa.h).
+  explicit BvhBackend(const BvhBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);
 
   std::string_view name() const override { return "bvh"; }
   BackendTraits traits() const override { return {.counts_traversal = true, .honours_ties = true, .watertight = true}; }
@@ -44,19 +48,19 @@ class BvhBackend final : public Backend {
 
   // Read-only access to the tree, for tests and tools.
   const BvhBuildOptions& options() const { return options_; }
+  Isa isa() const { return isa_; }
   std::span<const BvhNode> nodes() const { return nodes_; }
   const PrimitiveStore& primitives() const { return prims_; }
 
  private:
-  enum class Kinds { None, Triangles, Spheres, Mixed };
-
   BvhBuildOptions options_;
+  Isa isa_;
+  BvhKernels kernels_;  // null until build() saw at least one primitive
   std::vector<BvhNode> nodes_;
   PrimitiveStore prims_;
-  Kinds kinds_ = Kinds::None;
   BuildStats stats_;
 };
 
-std::unique_ptr<twinray::Backend> make_bvh_backend(const BvhBuildOptions& options = {});
+std::unique_ptr<twinray::Backend> make_bvh_backend(const BvhBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);
 
 }  // namespace twinray

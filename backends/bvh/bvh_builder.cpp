@@ -2,6 +2,8 @@
 
 #include "backends/bvh/primitive_store.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -29,6 +31,10 @@ constexpr int kMaxBins = 32;
 constexpr std::size_t kMedianOnlyDepth = kBvhMaxDepth - 1 - 33;
 // Subtrees with fewer primitives are built on the calling thread: task overhead would dominate.
 constexpr std::size_t kParallelGrain = 4096;
+// Nodes with at least this many primitives bin and partition in parallel chunks of kRangeChunk (the
+// top few levels, where the recursion alone has fewer subtrees than threads).
+constexpr std::size_t kParallelRangeGrain = std::size_t{1} << 15;
+constexpr std::size_t kRangeChunk = std::size_t{1} << 13;
 
 struct PrimRef {
   Bounds3 box;
@@ -58,49 +64,105 @@ struct Split {
   float cost = INFINITY;  // Bin: SAH cost relative to the node's area, in builder units
 };
 
+// What a node's split decision needs to know about its primitives, gathered by its parent while it
+// partitions (one pass over the primitives per level instead of two).
+struct RangeInfo {
+  Bounds3 box, centroids;
+  std::uint32_t second_kind = 0;  // how many are of the second kind
+
+  void add(const PrimRef& r, std::uint32_t second_kind_begin) {
+    box.extend(r.box);
+    centroids.extend(r.centroid);
+    second_kind += r.id >= second_kind_begin ? 1u : 0u;
+  }
+  void merge(const RangeInfo& o) {
+    box.extend(o.box);
+    centroids.extend(o.centroids);
+    second_kind += o.second_kind;
+  }
+};
+
+// The bins of all three axes, filled in one pass over the primitives.
+struct BinGrid {
+  std::array<std::array<Bin, kMaxBins>, 3> bin{};
+
+  void merge(const BinGrid& o, int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) {
+        Bin& b = bin[static_cast<std::size_t>(a)][static_cast<std::size_t>(k)];
+        const Bin& c = o.bin[static_cast<std::size_t>(a)][static_cast<std::size_t>(k)];
+        b.box.extend(c.box);
+        b.count += c.count;
+        b.second_kind += c.second_kind;
+      }
+  }
+};
+
 class Builder {
  public:
   Builder(std::span<PrimRef> refs, std::uint32_t second_kind_begin, const BvhBuildOptions& o)
       : refs_(refs), second_kind_begin_(second_kind_begin), o_(o) {}
 
-  // Appends the subtree over refs_[begin, end) to `out` in depth-first order. Child indices are relative to
-  // the start of `out`, which build() relies on when splicing subtrees built by other tasks.
-  void build(std::size_t begin, std::size_t end, std::size_t depth, std::vector<BvhNode>& out) const {
-    Bounds3 box, centroids;
-    std::size_t second_kind = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      box.extend(refs_[i].box);
-      centroids.extend(refs_[i].centroid);
-      second_kind += refs_[i].id >= second_kind_begin_ ? 1 : 0;
-    }
+  // Box, centroid bounds and kind count of refs_[begin, end): in parallel for a large range.
+  RangeInfo info_of(std::size_t begin, std::size_t end) const {
+    return reduce_chunks<RangeInfo>(begin, end, [&](std::size_t b, std::size_t e) {
+      RangeInfo info;
+      for (std::size_t i = b; i < e; ++i) info.add(refs_[i], second_kind_begin_);
+      return info;
+    }, [](RangeInfo& acc, const RangeInfo& part) { acc.merge(part); });
+  }
+
+  // Appends the subtree over refs_[begin, end), described by `info`, to `out` in depth-first order. Child
+  // indices are relative to the start of `out`, which build() relies on when splicing subtrees built by
+  // other tasks.
+  void build(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::vector<BvhNode>& out) const {
     const std::size_t n = end - begin;
-    const bool mixed = second_kind != 0 && second_kind != n;
+    const bool mixed = info.second_kind != 0 && info.second_kind != n;
 
     const std::size_t node_index = out.size();
-    out.push_back(BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0});
+    out.push_back(BvhNode{info.box.lo, static_cast<std::uint32_t>(begin), info.box.hi, 0});
 
-    const Split split = choose_split(begin, end, box, centroids, depth, mixed, static_cast<std::uint32_t>(second_kind));
+    const Split split = choose_split(begin, end, info.box, info.centroids, depth, mixed, info.second_kind);
     if (split.kind == Split::Kind::None) {
-      out[node_index].count = static_cast<std::uint32_t>(n) | (second_kind == n ? BvhNode::kSphereLeafBit : 0u);
+      out[node_index].count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
       return;
     }
-    const std::size_t mid = partition(begin, end, centroids, split);
+    RangeInfo left_info, right_info;
+    const std::size_t mid = partition(begin, end, info.centroids, split, left_info, right_info);
 
     if (o_.parallel && n >= kParallelGrain) {
       std::vector<BvhNode> left, right;
-      tbb::parallel_invoke([&] { build(begin, mid, depth + 1, left); },
-                           [&] { build(mid, end, depth + 1, right); });
+      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, left); },
+                           [&] { build(mid, end, right_info, depth + 1, right); });
       append_rebased(left, out);
       out[node_index].offset = static_cast<std::uint32_t>(out.size());
       append_rebased(right, out);
     } else {
-      build(begin, mid, depth + 1, out);
+      build(begin, mid, left_info, depth + 1, out);
       out[node_index].offset = static_cast<std::uint32_t>(out.size());
-      build(mid, end, depth + 1, out);
+      build(mid, end, right_info, depth + 1, out);
     }
   }
 
  private:
+  // Runs `body(b, e)` over fixed chunks of [begin, end) and folds the results in chunk order. The chunks
+  // do not depend on the thread count, and every fold used here (min, max, integer sums) is exact, so the
+  // result is the same serial or parallel. Large ranges run in TBB tasks when the build is parallel: the
+  // top levels of the tree are where a parallel recursion alone leaves threads idle.
+  template <class T, class Body, class Fold>
+  T reduce_chunks(std::size_t begin, std::size_t end, const Body& body, const Fold& fold) const {
+    const std::size_t n = end - begin;
+    if (!o_.parallel || n < kParallelRangeGrain) return body(begin, end);
+    const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
+    std::vector<T> parts(chunks);
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+      parts[c] = body(begin + c * kRangeChunk, std::min(end, begin + (c + 1) * kRangeChunk));
+    });
+    T acc = parts[0];
+    for (std::size_t c = 1; c < chunks; ++c) fold(acc, parts[c]);
+    return acc;
+  }
+
   static void append_rebased(const std::vector<BvhNode>& subtree, std::vector<BvhNode>& out) {
     const auto base = static_cast<std::uint32_t>(out.size());
     for (BvhNode node : subtree) {
@@ -138,22 +200,38 @@ class Builder {
     return std::clamp(b, 0, bins - 1);
   }
 
-  // On each axis, bins the centroids and sweeps the bins-1 planes between them. Split::cost is the
-  // un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted as in leaf_tests.
+  // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
+  // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
+  // as in leaf_tests.
   Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
     const int bins = o_.bins;
-    Split best;
+    std::array<float, 3> scale{};
+    std::array<bool, 3> usable{};
     for (int axis = 0; axis < 3; ++axis) {
       const float extent = centroids.hi[axis] - centroids.lo[axis];
-      const float scale = static_cast<float>(bins) / extent;
-      if (!(extent > 0.0f) || !std::isfinite(scale)) continue;
-      std::array<Bin, kMaxBins> bin{};
-      for (std::size_t i = begin; i < end; ++i) {
-        Bin& b = bin[static_cast<std::size_t>(bin_of(refs_[i].centroid[axis], centroids.lo[axis], scale, bins))];
-        b.box.extend(refs_[i].box);
-        ++b.count;
-        b.second_kind += refs_[i].id >= second_kind_begin_ ? 1u : 0u;
+      scale[static_cast<std::size_t>(axis)] = static_cast<float>(bins) / extent;
+      usable[static_cast<std::size_t>(axis)] = extent > 0.0f && std::isfinite(scale[static_cast<std::size_t>(axis)]);
+    }
+    const BinGrid grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
+      BinGrid g;
+      for (std::size_t i = b; i < e; ++i) {
+        const PrimRef& r = refs_[i];
+        const std::uint32_t second = r.id >= second_kind_begin_ ? 1u : 0u;
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          if (!usable[axis]) continue;
+          Bin& bin = g.bin[axis][static_cast<std::size_t>(bin_of(r.centroid[static_cast<int>(axis)], centroids.lo[static_cast<int>(axis)], scale[axis], bins))];
+          bin.box.extend(r.box);
+          ++bin.count;
+          bin.second_kind += second;
+        }
       }
+      return g;
+    }, [bins](BinGrid& acc, const BinGrid& part) { acc.merge(part, bins); });
+
+    Split best;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!usable[static_cast<std::size_t>(axis)]) continue;
+      const std::array<Bin, kMaxBins>& bin = grid.bin[static_cast<std::size_t>(axis)];
       // right_cost[k] = area * primitive tests of bins [k, bins)
       std::array<float, kMaxBins> right_cost{};
       Bounds3 acc;
@@ -179,34 +257,104 @@ class Builder {
     return best;
   }
 
-  std::size_t partition(std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split) const {
+  // Splits refs_[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
+  // chunks (count, then scatter through a buffer), small ones in place; the choice depends on the size
+  // only, so serial and parallel builds stay identical.
+  std::size_t partition(std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split,
+                        RangeInfo& left, RangeInfo& right) const {
     PrimRef* first = refs_.data() + begin;
     PrimRef* last = refs_.data() + end;
+    std::size_t mid = end;
     switch (split.kind) {
       case Split::Kind::Bin: {
         const int axis = split.axis;
         const float lo = centroids.lo[axis];
         const float scale = static_cast<float>(o_.bins) / (centroids.hi[axis] - lo);
         const int bins = o_.bins;
-        return static_cast<std::size_t>(
-            std::partition(first, last, [&](const PrimRef& r) { return bin_of(r.centroid[axis], lo, scale, bins) < split.bin; }) -
-            refs_.data());
+        const auto goes_left = [&](const PrimRef& r) { return bin_of(r.centroid[axis], lo, scale, bins) < split.bin; };
+        if (end - begin >= kParallelRangeGrain) return partition_in_chunks(begin, end, goes_left, left, right);
+        mid = static_cast<std::size_t>(std::partition(first, last, goes_left) - refs_.data());
+        break;
       }
       case Split::Kind::ByKind:
-        return static_cast<std::size_t>(
+        mid = static_cast<std::size_t>(
             std::stable_partition(first, last, [&](const PrimRef& r) { return r.id < second_kind_begin_; }) - refs_.data());
+        break;
       case Split::Kind::ObjectMedian: {
         // Ties broken by id, so the split (and the whole tree) does not depend on the partition algorithm.
         const int axis = split.axis;
-        PrimRef* mid = first + (last - first) / 2;
-        std::nth_element(first, mid, last, [axis](const PrimRef& a, const PrimRef& b) {
+        PrimRef* median = first + (last - first) / 2;
+        std::nth_element(first, median, last, [axis](const PrimRef& a, const PrimRef& b) {
           return a.centroid[axis] != b.centroid[axis] ? a.centroid[axis] < b.centroid[axis] : a.id < b.id;
         });
-        return static_cast<std::size_t>(mid - refs_.data());
+        mid = static_cast<std::size_t>(median - refs_.data());
+        break;
       }
       case Split::Kind::None: break;
     }
-    return end;
+    left = info_of(begin, mid);
+    right = info_of(mid, end);
+    return mid;
+  }
+
+  template <class Pred>
+  std::size_t partition_in_chunks(std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
+                                  RangeInfo& right) const {
+    const std::size_t n = end - begin;
+    const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
+    struct Part {
+      std::size_t lefts = 0;
+      RangeInfo left, right;
+    };
+    std::vector<Part> parts(chunks);
+    const auto chunk_range = [&](std::size_t c) {
+      return std::pair{begin + c * kRangeChunk, std::min(end, begin + (c + 1) * kRangeChunk)};
+    };
+    const auto count = [&](std::size_t c) {
+      const auto [b, e] = chunk_range(c);
+      Part& p = parts[c];
+      for (std::size_t i = b; i < e; ++i) {
+        if (goes_left(refs_[i])) {
+          ++p.lefts;
+          p.left.add(refs_[i], second_kind_begin_);
+        } else {
+          p.right.add(refs_[i], second_kind_begin_);
+        }
+      }
+    };
+    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, count);
+    else for (std::size_t c = 0; c < chunks; ++c) count(c);
+
+    std::vector<std::size_t> left_at(chunks), right_at(chunks);
+    std::size_t lefts = 0;
+    for (std::size_t c = 0; c < chunks; ++c) lefts += parts[c].lefts;
+    std::size_t l = 0, r = lefts;
+    left = RangeInfo{};
+    right = RangeInfo{};
+    for (std::size_t c = 0; c < chunks; ++c) {
+      left_at[c] = l;
+      right_at[c] = r;
+      l += parts[c].lefts;
+      r += (chunk_range(c).second - chunk_range(c).first) - parts[c].lefts;
+      left.merge(parts[c].left);
+      right.merge(parts[c].right);
+    }
+    std::vector<PrimRef> buffer(n);
+    const auto scatter = [&](std::size_t c) {
+      const auto [b, e] = chunk_range(c);
+      std::size_t li = left_at[c], ri = right_at[c];
+      for (std::size_t i = b; i < e; ++i) buffer[goes_left(refs_[i]) ? li++ : ri++] = refs_[i];
+    };
+    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, scatter);
+    else for (std::size_t c = 0; c < chunks; ++c) scatter(c);
+    const auto copy_back = [&](std::size_t c) {
+      const auto [b, e] = chunk_range(c);
+      std::copy(buffer.begin() + static_cast<std::ptrdiff_t>(b - begin), buffer.begin() + static_cast<std::ptrdiff_t>(e - begin),
+                refs_.begin() + static_cast<std::ptrdiff_t>(b));
+    };
+    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, copy_back);
+    else for (std::size_t c = 0; c < chunks; ++c) copy_back(c);
+    return begin + lefts;
   }
 
   std::span<PrimRef> refs_;
@@ -232,10 +380,18 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   BvhTree tree;
   if (bounds.empty()) return tree;
   std::vector<PrimRef> refs(bounds.size());
-  for (std::size_t i = 0; i < bounds.size(); ++i) refs[i] = {bounds[i], bounds[i].center(), static_cast<std::uint32_t>(i)};
+  const auto make_refs = [&](std::size_t b, std::size_t e) {
+    for (std::size_t i = b; i < e; ++i) refs[i] = {bounds[i], bounds[i].center(), static_cast<std::uint32_t>(i)};
+  };
+  if (options.parallel && refs.size() >= kParallelRangeGrain)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refs.size(), kRangeChunk),
+                      [&](const tbb::blocked_range<std::size_t>& r) { make_refs(r.begin(), r.end()); });
+  else
+    make_refs(0, refs.size());
 
   tree.nodes.reserve(2 * bounds.size());
-  Builder(refs, second_kind_begin, options).build(0, refs.size(), 0, tree.nodes);
+  const Builder builder(refs, second_kind_begin, options);
+  builder.build(0, refs.size(), builder.info_of(0, refs.size()), 0, tree.nodes);
   tree.nodes.shrink_to_fit();
 
   tree.prim_order.resize(refs.size());

@@ -18,14 +18,16 @@
 //
 // The test runs on SSE2 lanes x, y, z; lane 3 reads the node's integer field and is neutralised by a NaN
 // in inv_dir's lane 3, which the same NaN rule turns into "no constraint".
+//
+// The child-pair test exists twice: two SSE2 tests, and one AVX test of both boxes side by side; the
+// traversal kernels pick one per instruction set (bvh_kernels.h, backends/simd/isa.h).
 
 #include "backends/bvh/bvh_node.h"
+#include "backends/simd/isa.h"
 #include "core/geometry/ray.h"
 
 #include <emmintrin.h>
-#if defined(__AVX__)
 #include <immintrin.h>
-#endif
 
 #include <cmath>
 #include <limits>
@@ -49,17 +51,7 @@ struct BoxRay {
     inv_dir = _mm_setr_ps(ix, iy, iz, nan);
     const auto mask = [](float v) { return std::signbit(v) ? -1 : 0; };
     negative = _mm_castsi128_ps(_mm_setr_epi32(mask(ix), mask(iy), mask(iz), 0));
-#if defined(__AVX__)
-    org2 = _mm256_set_m128(org, org);
-    inv_dir2 = _mm256_set_m128(inv_dir, inv_dir);
-    negative2 = _mm256_set_m128(negative, negative);
-#endif
   }
-
-#if defined(__AVX__)
-  // The same three vectors twice, for testing two boxes at once (intersect_box_pair).
-  __m256 org2, inv_dir2, negative2;
-#endif
 };
 
 // True when the ray overlaps the node's box within [tmin, tmax] (closed); `entry` is where it enters.
@@ -84,19 +76,27 @@ struct BoxRay {
   return entry <= _mm_cvtss_f32(t1);
 }
 
-// Both children of an interior node at once: the test above, lane for lane, on the two boxes side by side
-// in one AVX register (low half: a, high half: b), so the entries are bit-identical to two single tests.
-// Returns a bit mask: 1 when a is hit, 2 when b is hit.
-[[gnu::always_inline]] inline unsigned intersect_box_pair(const BvhNode& a, const BvhNode& b, const BoxRay& r,
-                                                          float tmin, float tmax, float& entry_a, float& entry_b) {
-#if defined(__AVX__)
+// Both children of an interior node: two single tests. Returns a bit mask: 1 when a is hit, 2 when b is hit.
+[[gnu::always_inline]] inline unsigned intersect_box_pair_sse2(const BvhNode& a, const BvhNode& b, const BoxRay& r,
+                                                               float tmin, float tmax, float& entry_a, float& entry_b) {
+  return (intersect_box(a, r, tmin, tmax, entry_a) ? 1u : 0u) | (intersect_box(b, r, tmin, tmax, entry_b) ? 2u : 0u);
+}
+
+// Both children at once: the test above, lane for lane, on the two boxes side by side in one AVX register
+// (low half: a, high half: b), so the entries are bit-identical to two single tests. The broadcasts of the
+// ray's vectors are loop invariants the compiler hoists out of the traversal loop.
+[[gnu::always_inline]] TWINRAY_TARGET_AVX2 inline unsigned intersect_box_pair_avx2(const BvhNode& a, const BvhNode& b,
+                                                                                  const BoxRay& r, float tmin, float tmax,
+                                                                                  float& entry_a, float& entry_b) {
+  const __m256 org = _mm256_set_m128(r.org, r.org);
+  const __m256 inv_dir = _mm256_set_m128(r.inv_dir, r.inv_dir);
+  const __m256 negative = _mm256_set_m128(r.negative, r.negative);
   const __m256 lo = _mm256_set_m128(_mm_load_ps(&b.lo.x), _mm_load_ps(&a.lo.x));
   const __m256 hi = _mm256_set_m128(_mm_load_ps(&b.hi.x), _mm_load_ps(&a.hi.x));
-  const __m256 near_plane = _mm256_blendv_ps(lo, hi, r.negative2);
-  const __m256 far_plane = _mm256_blendv_ps(hi, lo, r.negative2);
-  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, r.org2), r.inv_dir2);
-  const __m256 t_far =
-      _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(far_plane, r.org2), r.inv_dir2), _mm256_set1_ps(kSlabFarScale));
+  const __m256 near_plane = _mm256_blendv_ps(lo, hi, negative);
+  const __m256 far_plane = _mm256_blendv_ps(hi, lo, negative);
+  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, org), inv_dir);
+  const __m256 t_far = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(far_plane, org), inv_dir), _mm256_set1_ps(kSlabFarScale));
   // Operand order matters: the NaN-free bound is the second operand (see above).
   __m256 t0 = _mm256_max_ps(t_near, _mm256_set1_ps(tmin));
   __m256 t1 = _mm256_min_ps(t_far, _mm256_set1_ps(tmax));
@@ -109,9 +109,6 @@ struct BoxRay {
   entry_b = _mm_cvtss_f32(_mm256_extractf128_ps(t0, 1));
   const unsigned hit = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
   return (hit & 1u) | ((hit >> 3) & 2u);
-#else
-  return (intersect_box(a, r, tmin, tmax, entry_a) ? 1u : 0u) | (intersect_box(b, r, tmin, tmax, entry_b) ? 2u : 0u);
-#endif
 }
 
 }  // namespace twinray

@@ -124,13 +124,15 @@ std::string to_markdown(const Document& doc) {
           break;
         case Block::Kind::Table: {
           m += "|";
-          for (const std::string& c : b.table.header) m += " " + md_cell(c) + " |";
+          // Appended piece by piece: GCC 12 warns (-Wstringop-overflow, a false positive) on the temporary that
+          // " " + cell + " |" builds, and appending avoids the temporary anyway.
+          for (const std::string& c : b.table.header) m.append(" ").append(md_cell(c)).append(" |");
           m += "\n|";
           for (std::size_t i = 0; i < b.table.header.size(); ++i) m += is_numeric(b.table, i) ? "---:|" : "---|";
           m += "\n";
           for (const auto& row : b.table.rows) {
             m += "|";
-            for (const std::string& c : row) m += " " + md_cell(c) + " |";
+            for (const std::string& c : row) m.append(" ").append(md_cell(c)).append(" |");
             m += "\n";
           }
           m += "\n";

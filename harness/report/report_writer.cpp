@@ -63,18 +63,19 @@ std::vector<Figure> bar_figure(const BarChart& chart, const fs::path& out, const
   return {{file, caption, true}};
 }
 
-// Scenes of the headline table: the shared meshes when measured, else every scene.
+// Scenes of the headline table: the shared meshes and the interior views of them when measured, else
+// every scene.
 std::vector<std::string> headline_scenes(const BenchResults& r) {
   std::vector<std::string> out;
   for (const std::string& s : r.scenes()) {
     const auto b = std::find_if(r.builds.begin(), r.builds.end(), [&](const BuildRow& row) { return row.scene == s; });
-    if (b != r.builds.end() && b->family == "mesh") out.push_back(s);
+    if (b != r.builds.end() && (b->family == "mesh" || b->family == "view")) out.push_back(s);
   }
   return out.empty() ? r.scenes() : out;
 }
 
 std::vector<std::string> ordered_backends(const BenchResults& r) {
-  std::vector<std::string> order = {"bvh", kReference, "embree", "brute"};
+  std::vector<std::string> order = {"bvh8", "bvh", kReference, "embree", "brute"};
   std::vector<std::string> out;
   const std::vector<std::string> present = r.backends();
   for (const std::string& b : order)
@@ -169,12 +170,12 @@ struct SeriesPoints {
   std::vector<double> n, v;
 };
 
-// family -> backend -> points, over the procedural scale series (family != "mesh").
+// family -> backend -> points, over the procedural scale series (not the meshes and views).
 template <class Value>
 std::map<std::string, std::map<std::string, SeriesPoints>> build_series(const BenchResults& r, Value value) {
   std::map<std::string, std::map<std::string, SeriesPoints>> out;
   for (const BuildRow& b : r.builds) {
-    if (b.family.empty() || b.family == "mesh") continue;
+    if (b.family.empty() || b.family == "mesh" || b.family == "view") continue;
     const double v = value(b);
     if (!(v > 0.0)) continue;
     SeriesPoints& p = out[b.family][b.backend];
@@ -189,7 +190,7 @@ std::map<std::string, std::map<std::string, SeriesPoints>> trace_series(const Be
                                                                         const std::string& query, Value value) {
   std::map<std::string, std::map<std::string, SeriesPoints>> out;
   for (const TraceRow& t : r.traces) {
-    if (t.family.empty() || t.family == "mesh" || t.kind != kind || t.query != query || t.threads != 1) continue;
+    if (t.family.empty() || t.family == "mesh" || t.family == "view" || t.kind != kind || t.query != query || t.threads != 1) continue;
     const double v = value(t);
     if (!(v > 0.0)) continue;
     SeriesPoints& p = out[t.family][t.backend];

@@ -1,4 +1,3 @@
-#pragma once
 // Closest-hit and any-hit traversal of the flat BVH.
 //
 // Ordered depth-first traversal: at an interior node both children's boxes are tested, the nearer child is
@@ -9,27 +8,10 @@
 //
 // The traversal is a template on the primitive kinds present, so a triangle-only scene runs a loop that
 // contains no sphere code at all (and vice versa); a mixed scene branches once per leaf.
-
-#include "backends/bvh/bvh_node.h"
-#include "backends/bvh/primitive_store.h"
-#include "backends/bvh/ray_box.h"
-#include "backends/bvh/triangle_block.h"
-#include "core/backend/backend.h"
-#include "core/geometry/hit.h"
-#include "core/geometry/ray.h"
-#include "core/intersect/sphere_robust.h"
-#include "core/intersect/triangle_watertight.h"
-
-#include <algorithm>
-#include <cstdint>
-#include <span>
-
-namespace twinray {
-
-struct BvhView {
-  std::span<const BvhNode> nodes;
-  const PrimitiveStore* prims;
-};
+//
+// No include guard: bvh_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
+// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
+// child-pair box test of ray_box.h) defined. See bvh_kernels.h.
 
 // Told about every node a query enters, in order, with the end of the interval still searched (the closest
 // hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
@@ -46,12 +28,12 @@ struct StackEntry {
 };
 
 // The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
-inline unsigned lane_mask(std::uint32_t remaining) {
+TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
   return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
 }
 
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
-inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
+TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
   while (size > 0) {
     const StackEntry& e = stack[--size];
     if (e.entry <= tmax) {
@@ -63,12 +45,12 @@ inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std
 }
 
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
-inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
+TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
                     float tmax, StackEntry* stack, std::size_t& size, std::uint32_t& next) {
   const std::uint32_t left = index + 1;
   const std::uint32_t right = nodes[index].second_child();
   float entry_left = 0.0f, entry_right = 0.0f;
-  const unsigned hits = intersect_box_pair(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
+  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
   const bool hit_left = (hits & 1u) != 0, hit_right = (hits & 2u) != 0;
   if (hit_left && hit_right) {
     const bool left_first = entry_left <= entry_right;
@@ -85,8 +67,12 @@ inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const B
 }  // namespace bvh_detail
 
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
-template <bool kTriangles, bool kSpheres, typename Observer = NoVisitObserver>
-bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats, const Observer& observer = {}) {
+// Always inlined into its one caller per instantiation (the kernel below, or a traced query), so that the
+// kernels compile to the code they had before observers existed.
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed(const BvhView& bvh, const Ray& ray,
+                                                                                Hit& hit, QueryStats* stats,
+                                                                                const Observer& observer) {
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
@@ -166,8 +152,10 @@ bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* sta
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres, typename Observer = NoVisitObserver>
-bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats, const Observer& observer = {}) {
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(const BvhView& bvh, const Ray& ray,
+                                                                               QueryStats* stats,
+                                                                               const Observer& observer) {
   using namespace bvh_detail;
   if (bvh.nodes.empty()) return false;
   const BoxRay box_ray(ray);
@@ -218,4 +206,13 @@ bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats, const O
   return found;
 }
 
-}  // namespace twinray
+// The kernels (BvhKernels): the traversals above without an observer.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  return bvh_intersect_observed<kTriangles, kSpheres>(bvh, ray, hit, stats, NoVisitObserver{});
+}
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
+}

@@ -1,0 +1,28 @@
+// The bvh traversal kernels on sse2: two SSE2 box tests per interior node.
+// See backends/simd/isa.h for why the instruction set is chosen by target attributes, not by flags.
+
+#include "backends/bvh/bvh_kernels.h"
+
+#include "backends/bvh/ray_box.h"
+#include "backends/bvh/triangle_block.h"
+#include "core/intersect/sphere_robust.h"
+#include "core/intersect/triangle_watertight.h"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace twinray::bvh_sse2 {
+
+#define TWINRAY_KERNEL 
+#define TWINRAY_BOX_PAIR intersect_box_pair_sse2
+#include "backends/bvh/bvh_traversal.inl"
+#undef TWINRAY_BOX_PAIR
+#undef TWINRAY_KERNEL
+
+BvhKernels kernels(bool triangles, bool spheres) {
+  if (triangles && spheres) return {&bvh_intersect<true, true>, &bvh_occluded<true, true>};
+  if (spheres) return {&bvh_intersect<false, true>, &bvh_occluded<false, true>};
+  return {&bvh_intersect<true, false>, &bvh_occluded<true, false>};
+}
+
+}  // namespace twinray::bvh_sse2

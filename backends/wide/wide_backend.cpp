@@ -1,0 +1,89 @@
+#include "backends/wide/wide_backend.h"
+
+#include "backends/bvh/bvh_builder.h"
+#include "backends/bvh/primitive_gather.h"
+#include "backends/bvh/ray_order.h"
+
+#include <chrono>
+#include <stdexcept>
+
+namespace twinray {
+
+WideBackend::WideBackend(const WideBuildOptions& options, std::optional<Isa> isa)
+    : options_(options), isa_(isa ? *isa : selected_isa()) {
+  validate(options_.binary);
+  validate(options_.collapse);
+  if (options_.binary.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
+    throw std::invalid_argument("bvh8: the binary tree's max_leaf_size must be at most 32");
+}
+
+void WideBackend::build(const SceneGeometry& geometry) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t n_triangles = geometry.triangle_count();
+  const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary);
+  WideTree tree = collapse_to_wide(binary, options_.collapse);
+
+  // Leaves are gathered in the order the nodes name them, so siblings' primitives are neighbours too.
+  PrimitiveGatherer gather(geometry, prims_);
+  for (WideNode& node : tree.nodes) {
+    for (std::uint32_t& child : node.child) {
+      if (!WideRef::is_leaf(child)) continue;
+      const WideLeafRange& leaf = tree.leaves[child & ~WideRef::kLeafBit];
+      const std::span<const std::uint32_t> ids(binary.prim_order.data() + leaf.first_prim, leaf.count);
+      const std::uint32_t first = leaf.spheres ? gather.append_spheres(ids) : gather.append_triangles(ids) / kTriangleBlockLanes;
+      if (first > WideRef::kFirstMask)
+        throw std::length_error("bvh8: too many primitives for 25-bit leaf references (at most 2^25 blocks)");
+      child = WideRef::leaf(first, leaf.count, leaf.spheres);
+    }
+  }
+  gather.finish();
+  nodes_ = std::move(tree.nodes);
+  nodes_.shrink_to_fit();
+  bounds_ = binary.nodes.empty() ? Bounds3{} : Bounds3{binary.nodes[0].lo, binary.nodes[0].hi};
+
+  const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();
+  kernels_ = has_triangles || has_spheres ? wide_kernels(isa_, has_triangles, has_spheres) : WideKernels{};
+
+  stats_ = BuildStats{};
+  stats_.triangles = n_triangles;
+  stats_.spheres = geometry.sphere_count();
+  stats_.built_triangles = has_triangles;
+  stats_.built_spheres = has_spheres;
+  stats_.nodes = nodes_.size();
+  stats_.leaves = tree.leaves.size();
+  stats_.max_depth = tree.max_depth;
+  stats_.sah_cost = tree.sah_cost;
+  stats_.memory_bytes = nodes_.capacity() * sizeof(WideNode) + prims_.memory_bytes();
+  stats_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool WideBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
+  if (stats) ++stats->queries;
+  if (kernels_.intersect == nullptr || !is_valid_ray(ray)) {  // an invalid ray must not sweep the tree
+    hit = Hit{};
+    return false;
+  }
+  return kernels_.intersect(WideView{nodes_, &prims_}, ray, hit, stats);
+}
+
+bool WideBackend::occluded(const Ray& ray, QueryStats* stats) const {
+  if (stats) ++stats->queries;
+  if (kernels_.occluded == nullptr || !is_valid_ray(ray)) return false;
+  return kernels_.occluded(WideView{nodes_, &prims_}, ray, stats);
+}
+
+void WideBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {
+  if (nodes_.empty()) return Backend::intersect(rays, hits, stats);
+  for (const std::uint32_t i : morton_ray_order(rays, bounds_)) intersect(rays[i], hits[i], stats);
+}
+
+void WideBackend::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) const {
+  if (nodes_.empty()) return Backend::occluded(rays, occluded, stats);
+  for (const std::uint32_t i : morton_ray_order(rays, bounds_)) occluded[i] = this->occluded(rays[i], stats) ? 1 : 0;
+}
+
+std::unique_ptr<Backend> make_wide_backend(const WideBuildOptions& options, std::optional<Isa> isa) {
+  return std::make_unique<WideBackend>(options, isa);
+}
+
+}  // namespace twinray

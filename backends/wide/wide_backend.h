@@ -1,0 +1,70 @@
+#pragma once
+// The wide BVH backend, name() == "bvh8": the binned SAH binary tree of the bvh backend (bvh_builder.h),
+// collapsed by cost into 8-wide nodes (wide_collapse.h) over the same leaf-ordered primitive store, and
+// traversed by SIMD kernels chosen at run time for SSE2, AVX2 or AVX-512 (wide_kernels.h).
+
+#include "backends/bvh/bvh_build_options.h"
+#include "backends/bvh/primitive_store.h"
+#include "backends/simd/isa.h"
+#include "backends/wide/wide_collapse.h"
+#include "backends/wide/wide_kernels.h"
+#include "backends/wide/wide_node.h"
+#include "core/backend/backend.h"
+
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace twinray {
+
+struct WideBuildOptions {
+  BvhBuildOptions binary = default_binary();
+  WideCollapseOptions collapse;
+
+  // The binary tree the collapse starts from. Its leaves are the smallest the wide tree can have, so it
+  // is built with cheaper interior steps than the bvh backend's (1:1 instead of 3:1: leaves of about two
+  // triangles), and the collapse merges them where a bigger leaf pays (docs/bvh-backend.md).
+  static BvhBuildOptions default_binary() {
+    BvhBuildOptions o;
+    o.traversal_cost = 1.0f;
+    return o;
+  }
+};
+
+class WideBackend final : public Backend {
+ public:
+  // Throws std::invalid_argument on bad options. `isa` picks the traversal kernels (tests run every path);
+  // by default the widest this CPU supports, lowered by $TWINRAY_ISA (backends/simd/isa.h).
+  explicit WideBackend(const WideBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);
+
+  std::string_view name() const override { return "bvh8"; }
+  BackendTraits traits() const override { return {.counts_traversal = true, .honours_ties = true, .watertight = true}; }
+
+  void build(const SceneGeometry& geometry) override;
+  BuildStats build_stats() const override { return stats_; }
+
+  bool intersect(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const override;
+  bool occluded(const Ray& ray, QueryStats* stats = nullptr) const override;
+  // Batches are traced in the Morton order of their ray origins (ray_order.h), like the bvh backend's.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const override;
+  void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats = nullptr) const override;
+
+  // Read-only access to the tree, for tests and tools.
+  Isa isa() const { return isa_; }
+  std::span<const WideNode> nodes() const { return nodes_; }
+  const PrimitiveStore& primitives() const { return prims_; }
+
+ private:
+  WideBuildOptions options_;
+  Isa isa_;
+  WideKernels kernels_;  // null until build() saw at least one primitive
+  std::vector<WideNode> nodes_;
+  PrimitiveStore prims_;
+  Bounds3 bounds_;       // of the whole scene, for the Morton order of batches
+  BuildStats stats_;
+};
+
+std::unique_ptr<Backend> make_wide_backend(const WideBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);
+
+}  // namespace twinray

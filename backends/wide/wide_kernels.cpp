@@ -1,0 +1,14 @@
+#include "backends/wide/wide_kernels.h"
+
+namespace twinray {
+
+WideKernels wide_kernels(Isa isa, bool triangles, bool spheres) {
+  switch (isa) {
+    case Isa::Sse2: return wide_sse2::kernels(triangles, spheres);
+    case Isa::Avx2: return wide_avx2::kernels(triangles, spheres);
+    case Isa::Avx512: return wide_avx512::kernels(triangles, spheres);
+  }
+  return wide_sse2::kernels(triangles, spheres);
+}
+
+}  // namespace twinray

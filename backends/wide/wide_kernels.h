@@ -1,0 +1,43 @@
+#pragma once
+// The wide backend's traversal kernels (wide_traversal.inl), compiled once per instruction set.
+//
+// What differs between the sets is only the eight-box slab test and reading the children's leaf bits
+// (wide_kernels_<isa>.cpp); traversal, ordering and the leaf tests are the same code. All sets give
+// bit-identical answers (tests/test_wide_bvh.cpp runs every set this CPU has).
+
+#include "backends/bvh/primitive_store.h"
+#include "backends/simd/isa.h"
+#include "backends/wide/wide_node.h"
+#include "core/backend/backend.h"
+#include "core/geometry/hit.h"
+#include "core/geometry/ray.h"
+
+#include <span>
+
+namespace twinray {
+
+struct WideView {
+  std::span<const WideNode> nodes;  // nodes[0] is the root; never empty when a kernel runs
+  const PrimitiveStore* prims;
+};
+
+// Closest hit (fills `hit` completely or leaves it a miss) and any hit, for a valid ray.
+struct WideKernels {
+  bool (*intersect)(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
+  bool (*occluded)(const WideView& bvh, const Ray& ray, QueryStats* stats) = nullptr;
+};
+
+// The kernels for scenes with the given primitive kinds (at least one) on `isa`.
+WideKernels wide_kernels(Isa isa, bool triangles, bool spheres);
+
+namespace wide_sse2 {
+WideKernels kernels(bool triangles, bool spheres);
+}
+namespace wide_avx2 {
+WideKernels kernels(bool triangles, bool spheres);
+}
+namespace wide_avx512 {
+WideKernels kernels(bool triangles, bool spheres);
+}
+
+}  // namespace twinray

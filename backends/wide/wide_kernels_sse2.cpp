@@ -1,0 +1,81 @@
+// The wide traversal kernels on SSE2 (any x86-64 CPU): each node's eight boxes as two groups of four.
+// See backends/simd/isa.h for how the instruction sets are chosen.
+
+#include "backends/wide/wide_kernels.h"
+
+#include "backends/bvh/ray_box.h"
+#include "backends/bvh/triangle_block.h"
+#include "core/intersect/sphere_robust.h"
+#include "core/intersect/triangle_watertight.h"
+
+#include <emmintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+namespace twinray::wide_sse2 {
+
+#define TWINRAY_KERNEL
+
+// The ray as the slab test needs it: origin and reciprocal direction broadcast, and per axis the row
+// offsets (WideNode::lo_row / hi_row) of the near and far planes, chosen by the direction's sign (-0
+// included) as in ray_box.h.
+struct WideBoxRay {
+  __m128 org[3], inv[3];
+  std::size_t near_row[3], far_row[3];
+
+  explicit WideBoxRay(const Ray& ray) {
+    for (int a = 0; a < 3; ++a) {
+      const float inv_dir = 1.0f / ray.dir[a];
+      org[a] = _mm_set1_ps(ray.org[a]);
+      inv[a] = _mm_set1_ps(inv_dir);
+      const bool negative = std::signbit(inv_dir);
+      near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
+      far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
+    }
+  }
+};
+
+// Ize's robust slab test (ray_box.h) on four boxes: columns [col, col + 4) of the node's rows. The near and
+// far values of each axis are folded into [tmin, tmax] one axis at a time with the NaN-free bound as the
+// second operand of max / min, so a 0 * inf NaN drops out exactly as in the binary test.
+inline unsigned test_four(const float* rows, const WideBoxRay& r, std::size_t col, __m128 tmin, __m128 tmax,
+                          float* entry) {
+  __m128 t0 = tmin, t1 = tmax;
+  const __m128 scale = _mm_set1_ps(kSlabFarScale);
+  for (int a = 0; a < 3; ++a) {
+    const __m128 t_near = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.near_row[a] + col), r.org[a]), r.inv[a]);
+    const __m128 t_far =
+        _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.far_row[a] + col), r.org[a]), r.inv[a]), scale);
+    t0 = _mm_max_ps(t_near, t0);
+    t1 = _mm_min_ps(t_far, t1);
+  }
+  _mm_store_ps(entry + col, t0);
+  return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(t0, t1)));
+}
+
+// Bit s set when child slot s's box is hit within [tmin, tmax]; entry[s] is where the ray enters it.
+inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax, float* entry) {
+  const __m128 t0 = _mm_set1_ps(tmin), t1 = _mm_set1_ps(tmax);
+  return test_four(&node.lo[0][0], r, 0, t0, t1, entry) | (test_four(&node.lo[0][0], r, 4, t0, t1, entry) << 4);
+}
+
+// Bit s set when child slot s is a leaf (the reference's top bit).
+inline unsigned leaf_children(const WideNode& node) {
+  const __m128 lo = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(node.child)));
+  const __m128 hi = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(node.child + 4)));
+  return static_cast<unsigned>(_mm_movemask_ps(lo)) | (static_cast<unsigned>(_mm_movemask_ps(hi)) << 4);
+}
+
+#include "backends/wide/wide_traversal.inl"
+#undef TWINRAY_KERNEL
+
+WideKernels kernels(bool triangles, bool spheres) {
+  if (triangles && spheres) return {&wide_intersect<true, true>, &wide_occluded<true, true>};
+  if (spheres) return {&wide_intersect<false, true>, &wide_occluded<false, true>};
+  return {&wide_intersect<true, false>, &wide_occluded<true, false>};
+}
+
+}  // namespace twinray::wide_sse2

@@ -1,0 +1,58 @@
+#pragma once
+// The 8-wide BVH node: eight child boxes in structure-of-arrays form, tested together by one SIMD slab
+// test (wide_box.h), and eight child references.
+//
+// Layout: lo[axis][slot] and hi[axis][slot], each row one 32-byte aligned vector of eight floats, then the
+// children: 224 bytes, seven 32-byte units (Embree's 8-wide node is 256). Boxes are plain floats, not
+// quantised: the tree then needs no dequantisation on the hot path, and its memory still stays below
+// Embree's (docs/bvh-backend.md has the figures).
+//
+// Unused slots hold the empty box (lo = +inf, hi = -inf), which the slab test never hits (every slab
+// distance of the near plane is +inf and of the far plane -inf, for any finite origin and any
+// direction), so traversal needs no count of children. Filled slots come first.
+//
+// A child reference is either the index of another node (top bit clear) or a leaf (top bit set) naming a
+// run of primitives in the PrimitiveStore: for triangles the first block of four and the number of
+// triangles, for spheres the first sphere and their number. Leaves never mix kinds.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+namespace twinray {
+
+inline constexpr int kWideWidth = 8;
+
+struct alignas(32) WideNode {
+  float lo[3][kWideWidth];
+  float hi[3][kWideWidth];
+  std::uint32_t child[kWideWidth];
+
+  // Offset in floats of row lo[axis] (hi[axis] is 3 * kWideWidth further).
+  static constexpr std::size_t lo_row(int axis) { return static_cast<std::size_t>(axis) * kWideWidth; }
+  static constexpr std::size_t hi_row(int axis) { return lo_row(axis) + 3 * kWideWidth; }
+};
+static_assert(sizeof(WideNode) == 224, "seven 32-byte units");
+
+struct WideRef {
+  static constexpr std::uint32_t kLeafBit = 0x80000000u;
+  static constexpr std::uint32_t kSphereBit = 0x40000000u;
+  static constexpr int kCountShift = 25;                       // count - 1 in bits 25..29
+  static constexpr std::uint32_t kMaxLeafCount = 32;
+  static constexpr std::uint32_t kFirstMask = (1u << kCountShift) - 1;  // 32M blocks or spheres
+
+  static constexpr bool is_leaf(std::uint32_t ref) { return (ref & kLeafBit) != 0; }
+  static constexpr bool is_sphere_leaf(std::uint32_t ref) { return (ref & kSphereBit) != 0; }
+  static constexpr std::uint32_t count(std::uint32_t ref) { return ((ref >> kCountShift) & 31u) + 1; }
+  static constexpr std::uint32_t first(std::uint32_t ref) { return ref & kFirstMask; }
+  // `first`: for triangles the first block (not slot), for spheres the first sphere.
+  static constexpr std::uint32_t leaf(std::uint32_t first, std::uint32_t count, bool spheres) {
+    return kLeafBit | (spheres ? kSphereBit : 0u) | ((count - 1) << kCountShift) | first;
+  }
+};
+
+// The traversal stack holds at most (width - 1) entries per level below the root.
+inline constexpr std::size_t kWideMaxDepth = 128;
+inline constexpr std::size_t kWideStackSize = kWideMaxDepth * (kWideWidth - 1) + 1;
+
+}  // namespace twinray

@@ -1,0 +1,247 @@
+// Closest-hit and any-hit traversal of the 8-wide BVH (wide_node.h).
+//
+// Closest hit: at a node, the eight child boxes are tested at once; the hit children are visited nearest
+// entry first, the others pushed farthest first with their entry distances, and popped entries that start
+// beyond the best hit so far are dropped without touching their node. As in the binary bvh, the interval
+// [tmin, best t] stays closed and ties go through `precedes`, so the answer is bit-identical to the brute
+// force loop whatever the visiting order.
+//
+// Any hit: the first hit ends the query, so the order is chosen to find one early and cheaply. The hit
+// leaf children of a node are tested right away (a leaf test can end the query; a node can only lead to
+// one), then the inner children are visited in stored order, larger area first (SATO, see
+// wide_collapse.h), with no sorting at all.
+//
+// Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h).
+//
+// No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
+// headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes()
+// and leaf_children() for its instruction set.
+
+namespace wide_detail {
+
+struct StackEntry {
+  std::uint32_t ref;
+  float entry;  // where the ray enters the child's box
+};
+
+// The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
+TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
+  return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
+}
+
+// Boxes a node visit tests: its filled slots (empty ones have lo > hi). Only for statistics.
+TWINRAY_KERNEL inline std::uint64_t filled_slots(const WideNode& node) {
+  std::uint64_t n = 0;
+  for (int s = 0; s < kWideWidth; ++s) n += node.lo[0][s] <= node.hi[0][s] ? 1u : 0u;
+  return n;
+}
+
+// Pops the next entry worth visiting (entry <= tmax). False when the stack is exhausted.
+TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& ref) {
+  while (size > 0) {
+    const StackEntry& e = stack[--size];
+    if (e.entry <= tmax) {
+      ref = e.ref;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Two or more hit children: returns the nearest and pushes the others, farthest first.
+TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigned mask, const float* entry,
+                                                   StackEntry* stack, std::size_t& size) {
+  const unsigned a = static_cast<unsigned>(__builtin_ctz(mask));
+  mask &= mask - 1;
+  const unsigned b = static_cast<unsigned>(__builtin_ctz(mask));
+  mask &= mask - 1;
+  if (mask == 0) {  // the common case: exactly two
+    const bool a_first = entry[a] <= entry[b];
+    const unsigned near = a_first ? a : b, far = a_first ? b : a;
+    stack[size++] = StackEntry{node.child[far], entry[far]};
+    return node.child[near];
+  }
+  // Three or more: keys pack the entry's bits above the slot. Entries are >= tmin >= 0, whose bit patterns
+  // order like their values (a -0 entry sorts last, which only changes the order, never the answer).
+  std::uint64_t keys[kWideWidth];
+  int n = 0;
+  mask |= (1u << a) | (1u << b);
+  for (; mask != 0; mask &= mask - 1) {
+    const unsigned s = static_cast<unsigned>(__builtin_ctz(mask));
+    std::uint32_t bits;
+    std::memcpy(&bits, &entry[s], sizeof bits);
+    const std::uint64_t key = (std::uint64_t{bits} << 32) | s;
+    int k = n++;  // insertion into descending order
+    for (; k > 0 && keys[k - 1] < key; --k) keys[k] = keys[k - 1];
+    keys[k] = key;
+  }
+  for (int k = 0; k < n - 1; ++k) {
+    const auto s = static_cast<unsigned>(keys[k] & 7u);
+    stack[size++] = StackEntry{node.child[s], entry[s]};
+  }
+  return node.child[keys[n - 1] & 7u];
+}
+
+}  // namespace wide_detail
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  using namespace wide_detail;
+  hit = Hit{};
+  const WideBoxRay box_ray(ray);
+  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  StackEntry stack[kWideStackSize];
+  std::size_t size = 0;
+  std::uint64_t boxes_tested = 0, prims_tested = 0;
+  float tmax = ray.tmax;  // shrinks to the best hit's t
+  bool best_is_sphere = false;
+  std::uint32_t best_index = 0;  // into the store's array of the best hit's kind
+  alignas(32) float entry[kWideWidth];
+
+  std::uint32_t ref = 0;  // the root node
+  for (;;) {
+    if (!WideRef::is_leaf(ref)) {
+      const WideNode& node = bvh.nodes[ref];
+      if (stats) boxes_tested += filled_slots(node);
+      const unsigned mask = test_boxes(node, box_ray, ray.tmin, tmax, entry);
+      if (mask != 0) {
+        if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
+        else ref = order_children(node, mask, entry, stack, size);
+        continue;
+      }
+    } else {
+      const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
+      prims_tested += count;
+      if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
+        const std::uint32_t first_slot = first * kTriangleBlockLanes;
+        for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
+          BlockHits found;
+          unsigned hits = intersect_triangle_block(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
+                                                   lane_mask(count - k), ray.tmin, tmax, found);
+          for (; hits != 0; hits &= hits - 1) {
+            const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
+            const std::uint32_t slot = first_slot + k + lane;
+            const PrimitiveKey key = prims.triangle_keys[slot];
+            if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
+            hit.t = tmax = found.t[lane];
+            hit.u = found.u[lane];
+            hit.v = found.v[lane];
+            hit.geom_id = key.geom_id;
+            hit.prim_id = key.prim_id;
+            best_is_sphere = false;
+            best_index = slot;
+          }
+        }
+      } else if constexpr (kSpheres) {
+        for (std::uint32_t i = first; i < first + count; ++i) {
+          const StoredSphere& s = prims.spheres[i];
+          float t;
+          if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
+          const PrimitiveKey key = prims.sphere_keys[i];
+          if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
+          hit.t = tmax = t;
+          hit.geom_id = key.geom_id;
+          hit.prim_id = key.prim_id;
+          best_is_sphere = true;
+          best_index = i;
+        }
+      }
+    }
+    if (!pop_next(stack, size, tmax, ref)) break;
+  }
+
+  if (stats) {
+    stats->nodes_visited += boxes_tested;
+    stats->primitives_tested += prims_tested;
+  }
+  if (!hit.found()) return false;
+  if (kSpheres && best_is_sphere) {
+    const StoredSphere& s = prims.spheres[best_index];
+    sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
+  } else if constexpr (kTriangles) {
+    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
+                                       prims.triangle_vertex(best_index, 2));
+  }
+  return true;
+}
+
+namespace wide_detail {
+
+// Any hit in one leaf. Counts the primitives it tests.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
+                                         const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
+  const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
+  if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
+    for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
+      const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
+      prims_tested += in_block;
+      BlockHits unused;
+      if (intersect_triangle_block(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(in_block),
+                                   ray.tmin, ray.tmax, unused) != 0)
+        return true;
+    }
+  } else if constexpr (kSpheres) {
+    for (std::uint32_t i = first; i < first + count; ++i) {
+      ++prims_tested;
+      const StoredSphere& s = prims.spheres[i];
+      float t;
+      if (intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t)) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace wide_detail
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
+  using namespace wide_detail;
+  const WideBoxRay box_ray(ray);
+  const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const PrimitiveStore& prims = *bvh.prims;
+
+  std::uint32_t stack[kWideStackSize];
+  std::size_t size = 0;
+  std::uint64_t boxes_tested = 0, prims_tested = 0;
+  bool found = false;
+  alignas(32) float entry[kWideWidth];
+
+  std::uint32_t index = 0;  // a node: leaves never go on the stack
+  for (;;) {
+    const WideNode& node = bvh.nodes[index];
+    if (stats) boxes_tested += filled_slots(node);
+    const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
+    const unsigned leaves = mask & leaf_children(node);
+    for (unsigned m = leaves; m != 0; m &= m - 1) {
+      if (leaf_occluded<kTriangles, kSpheres>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
+        found = true;
+        break;
+      }
+    }
+    if (found) break;
+    unsigned inner = mask & ~leaves;
+    if (inner != 0) {
+      // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
+      const unsigned next = static_cast<unsigned>(__builtin_ctz(inner));
+      inner &= inner - 1;
+      while (inner != 0) {
+        const unsigned s = 31u - static_cast<unsigned>(__builtin_clz(inner));
+        stack[size++] = node.child[s];
+        inner &= ~(1u << s);
+      }
+      index = node.child[next];
+      continue;
+    }
+    if (size == 0) break;
+    index = stack[--size];
+  }
+
+  if (stats) {
+    stats->nodes_visited += boxes_tested;
+    stats->primitives_tested += prims_tested;
+  }
+  return found;
+}

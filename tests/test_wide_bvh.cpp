@@ -1,0 +1,220 @@
+// The 8-wide tree (backends/wide): its structure after the cost-driven collapse, and the run-time choice of
+// instruction set. Its answers are checked against the brute-force oracle on every instruction set in
+// test_bvh_vs_brute.cpp, its batches in test_bvh_batch.cpp, and against Embree in test_backends_agree.cpp.
+
+#include "backends/bvh/bvh_builder.h"
+#include "backends/simd/isa.h"
+#include "backends/wide/wide_backend.h"
+#include "backends/wide/wide_collapse.h"
+#include "core/scene/procedural.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace twinray {
+namespace {
+
+TEST(WideBvh, NodeIs224Bytes) { EXPECT_EQ(sizeof(WideNode), 224u); }
+
+// Walks the tree from the root: every filled slot's box contains its subtree, empty slots come last and
+// hold the empty box, every primitive is in exactly one leaf, and leaves never mix kinds.
+void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
+  const std::span<const WideNode> nodes = tree.nodes();
+  const PrimitiveStore& prims = tree.primitives();
+  ASSERT_FALSE(nodes.empty());
+  std::multiset<std::pair<std::uint32_t, std::uint32_t>> seen;  // (geom, prim) of every stored primitive
+  std::vector<std::uint32_t> stack = {0};
+  std::size_t visited = 0;
+  while (!stack.empty()) {
+    const WideNode& node = nodes[stack.back()];
+    stack.pop_back();
+    ++visited;
+    bool empty_seen = false;
+    int filled = 0;
+    for (int s = 0; s < kWideWidth; ++s) {
+      const Bounds3 box{{node.lo[0][s], node.lo[1][s], node.lo[2][s]}, {node.hi[0][s], node.hi[1][s], node.hi[2][s]}};
+      const bool empty = std::isinf(box.lo.x) && box.lo.x > 0 && std::isinf(box.hi.x) && box.hi.x < 0;
+      if (empty) {
+        empty_seen = true;
+        continue;
+      }
+      ASSERT_FALSE(empty_seen) << "filled slots come first";
+      ++filled;
+      const std::uint32_t ref = node.child[s];
+      if (!WideRef::is_leaf(ref)) {
+        ASSERT_LT(ref, nodes.size());
+        const WideNode& child = nodes[ref];
+        for (int c = 0; c < kWideWidth; ++c) {
+          if (std::isinf(child.lo[0][c])) continue;
+          for (int a = 0; a < 3; ++a) {
+            EXPECT_LE(box.lo[a], child.lo[a][c]);
+            EXPECT_GE(box.hi[a], child.hi[a][c]);
+          }
+        }
+        stack.push_back(ref);
+        continue;
+      }
+      const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
+      ASSERT_LE(count, WideRef::kMaxLeafCount);
+      for (std::uint32_t i = 0; i < count; ++i) {
+        if (WideRef::is_sphere_leaf(ref)) {
+          const StoredSphere& sp = prims.spheres[first + i];
+          for (int a = 0; a < 3; ++a) {
+            EXPECT_LE(box.lo[a], sp.center[a] - sp.radius);
+            EXPECT_GE(box.hi[a], sp.center[a] + sp.radius);
+          }
+          seen.insert({prims.sphere_keys[first + i].geom_id, prims.sphere_keys[first + i].prim_id});
+        } else {
+          const std::uint32_t slot = first * kTriangleBlockLanes + i;
+          for (std::uint32_t v = 0; v < 3; ++v) {
+            const glm::vec3 p = prims.triangle_vertex(slot, v);
+            for (int a = 0; a < 3; ++a) {
+              EXPECT_LE(box.lo[a], p[a]);
+              EXPECT_GE(box.hi[a], p[a]);
+            }
+          }
+          ASSERT_FALSE(prims.triangle_keys[slot].is_padding());
+          seen.insert({prims.triangle_keys[slot].geom_id, prims.triangle_keys[slot].prim_id});
+        }
+      }
+    }
+    EXPECT_GE(filled, 1);
+  }
+  EXPECT_EQ(visited, nodes.size()) << "every node reachable exactly once";
+  EXPECT_EQ(seen.size(), g.primitive_count());
+  for (const TriangleMesh& mesh : g.meshes)
+    for (std::uint32_t i = 0; i < mesh.indices.size(); ++i) EXPECT_EQ(seen.count({mesh.geom_id, i}), 1u);
+  for (const Sphere& s : g.spheres) EXPECT_EQ(seen.count({s.geom_id, 0u}), 1u);
+}
+
+TEST(WideBvh, TreesAreWellFormed) {
+  for (const SceneGeometry& g : {random_triangle_soup(3000, 5), mixed_spheres_and_triangles(60, 900, 2),
+                                 random_spheres(100, 4), grid_mesh(3, 3)}) {
+    WideBackend tree;
+    tree.build(g);
+    expect_well_formed(tree, g);
+    EXPECT_GT(tree.build_stats().nodes, 0u);
+    EXPECT_LE(tree.build_stats().max_depth, kWideMaxDepth);
+  }
+}
+
+TEST(WideBvh, OneTrianglePutsOneLeafUnderTheRoot) {
+  SceneGeometry g;
+  TriangleMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  mesh.indices = {{0, 1, 2}};
+  g.meshes.push_back(mesh);
+  WideBackend tree;
+  tree.build(g);
+  ASSERT_EQ(tree.nodes().size(), 1u);
+  EXPECT_TRUE(WideRef::is_leaf(tree.nodes()[0].child[0]));
+  expect_well_formed(tree, g);
+  Ray ray;
+  ray.org = {0.25f, 0.25f, 1.0f};
+  ray.dir = {0.0f, 0.0f, -1.0f};
+  Hit hit;
+  EXPECT_TRUE(tree.intersect(ray, hit));
+  EXPECT_EQ(hit.t, 1.0f);
+}
+
+// The collapse's cost is the optimum over all ways to cut the binary tree into wide nodes, so it is never
+// above that of the plain cut that keeps every binary leaf and pulls up children level by level.
+TEST(WideBvh, CollapseCostIsNoWorseThanKeepingEveryBinaryLeaf) {
+  const SceneGeometry g = random_triangle_soup(5000, 9);
+  std::vector<Bounds3> bounds;
+  for (const glm::uvec3& t : g.meshes[0].indices) {
+    Bounds3 b = Bounds3::of_point(g.meshes[0].positions[t.x]);
+    b.extend(g.meshes[0].positions[t.y]);
+    b.extend(g.meshes[0].positions[t.z]);
+    bounds.push_back(b);
+  }
+  const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), WideBuildOptions::default_binary());
+  WideCollapseOptions merge, keep;
+  keep.max_leaf_size = 1;  // merging is then impossible (binary leaves hold more than one)
+  const WideTree merged = collapse_to_wide(binary, merge);
+  const WideTree kept = collapse_to_wide(binary, keep);
+  EXPECT_GT(merged.sah_cost, 0.0);
+  EXPECT_LE(merged.sah_cost, kept.sah_cost * (1.0 + 1e-6));
+  // A far costlier node visit makes the collapse choose fewer, fuller nodes.
+  WideCollapseOptions dear_nodes;
+  dear_nodes.node_cost = 8.0f;
+  EXPECT_LE(collapse_to_wide(binary, dear_nodes).nodes.size(), merged.nodes.size());
+}
+
+TEST(WideBvh, OptionsAreValidated) {
+  WideBuildOptions o;
+  o.collapse.max_leaf_size = 33;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o = {};
+  o.collapse.node_cost = 0.0f;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o = {};
+  o.binary.max_leaf_size = 40;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+}
+
+TEST(WideBvh, EmptySceneBuildsAndMisses) {
+  WideBackend tree;
+  tree.build(SceneGeometry{});
+  Ray ray;
+  Hit hit;
+  EXPECT_FALSE(tree.intersect(ray, hit));
+  EXPECT_FALSE(tree.occluded(ray));
+}
+
+// Sets TWINRAY_ISA for the scope of one test and restores the previous value.
+class ScopedIsaEnv {
+ public:
+  explicit ScopedIsaEnv(const char* value) {
+    if (const char* old = std::getenv("TWINRAY_ISA")) old_ = old;
+    if (value) setenv("TWINRAY_ISA", value, 1);
+    else unsetenv("TWINRAY_ISA");
+  }
+  ~ScopedIsaEnv() {
+    if (old_) setenv("TWINRAY_ISA", old_->c_str(), 1);
+    else unsetenv("TWINRAY_ISA");
+  }
+
+ private:
+  std::optional<std::string> old_;
+};
+
+TEST(CpuIsa, NamesRoundTrip) {
+  for (const Isa isa : {Isa::Sse2, Isa::Avx2, Isa::Avx512}) EXPECT_EQ(parse_isa(to_string(isa)), isa);
+  EXPECT_FALSE(parse_isa("avx"));
+  EXPECT_FALSE(parse_isa("AVX2"));
+}
+
+TEST(CpuIsa, EnvironmentLowersTheChoiceAndRejectsWhatTheCpuLacks) {
+  {
+    const ScopedIsaEnv env(nullptr);
+    EXPECT_EQ(selected_isa(), cpu_isa());
+  }
+  {
+    const ScopedIsaEnv env("sse2");
+    EXPECT_EQ(selected_isa(), Isa::Sse2);
+    EXPECT_EQ(WideBackend{}.isa(), Isa::Sse2);
+  }
+  {
+    const ScopedIsaEnv env("neon");
+    EXPECT_THROW(selected_isa(), std::invalid_argument);
+    EXPECT_THROW(WideBackend{}, std::invalid_argument);
+  }
+  if (cpu_isa() < Isa::Avx512) {
+    const ScopedIsaEnv env("avx512");
+    EXPECT_THROW(selected_isa(), std::invalid_argument);
+  }
+  const std::vector<Isa> all = runnable_isas();
+  ASSERT_FALSE(all.empty());
+  EXPECT_EQ(all.front(), Isa::Sse2);
+  EXPECT_EQ(all.back(), cpu_isa());
+}
+
+}  // namespace
+}  // namespace twinray
