@@ -53,7 +53,7 @@ void add_trace_command(CLI::App& app, CommandRunner& run) {
                   "(docs/grading.md lists the kinds)")
       ->required();
   cmd->add_option("--backends", opt->backends,
-                  "Comma-separated backends, compared with the first (bvh, embree, embree-fast, brute, plugin:PATH)")
+                  "Comma-separated backends, compared with the first (bvh8, bvh, embree, embree-fast, brute, plugin:PATH, plugin-inprocess:PATH)")
       ->capture_default_str();
   cmd->add_option("--ray", opt->ray,
                   "'ox oy oz dx dy dz tmin tmax': decimal or hexadecimal floats (0x1.8p+0), inf allowed")
