@@ -3,7 +3,7 @@
 #include "backends/registry.h"
 #include "cli/commands.h"
 #include "core/util/atomic_file.h"
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 #include "harness/trace/trace_run.h"
 
 #include <fmt/core.h>

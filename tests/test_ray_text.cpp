@@ -1,6 +1,6 @@
-// Rays as command-line text (harness/trace/ray_text.h): a reproduce line must replay its ray bit for bit.
+// Rays as command-line text (core/geometry/ray_text.h): a reproduce line must replay its ray bit for bit.
 
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 #include "ray_test_util.h"
 
 #include <gtest/gtest.h>

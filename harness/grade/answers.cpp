@@ -1,6 +1,6 @@
 #include "harness/grade/answers.h"
 
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 
 #include <fmt/core.h>
 

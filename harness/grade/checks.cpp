@@ -1,7 +1,7 @@
 #include "harness/grade/checks.h"
 
 #include "harness/grade/grade_rays.h"
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 
 #include <fmt/core.h>
 

@@ -19,27 +19,14 @@ PluginLimits limits_of(const LaunchLimits& l) {
   return limits;
 }
 
-std::string stage_words(const std::string& stage) {
-  return stage.empty() ? std::string() : " in " + stage;
-}
-
-// One line: what happened and where. The ray goes into the reproduce line, the plugin's output into the
-// check's figures.
+// One line: what happened and where, in the isolated backend's own words (plugin_failure.h). The ray goes
+// into the reproduce line and the plugin's output into the check's figures, so both are left out here.
 std::string describe_failure(const PluginFailure& f) {
-  const std::string where = stage_words(f.stage);
-  const std::string extra = f.detail.empty() ? "" : " (" + f.detail + ")";
-  if (f.kind == PluginFailureKind::Timeout) return "no answer within the time limit" + where + extra;
-  if (f.cause == "signal") return fmt::format("crashed with {}{}", f.signal_name, where);
-  if (f.cause == "abort")
-    return fmt::format("aborted ({}){}{}", f.signal_name.empty() ? "SIGABRT" : f.signal_name, where, extra);
-  if (f.cause == "exit") return fmt::format("called exit({}){}", f.exit_code, where);
-  if (f.cause == "out-of-memory") return "ran out of memory" + where + extra;
-  if (f.cause == "sandbox")
-    return fmt::format("stopped by the sandbox: system call {}{}", f.syscall.empty() ? "?" : f.syscall, where);
-  if (f.cause == "exception") return "let a C++ exception escape" + where + extra;
-  if (f.cause == "bad-hit") return "reported a hit on a primitive that does not exist" + where + extra;
-  if (f.cause == "load") return "died while loading" + extra;
-  return std::string(f.what());
+  PluginFailureDetails d = f;
+  d.plugin = "the plugin";
+  d.ray.reset();
+  d.ray_index.reset();
+  return describe(d);
 }
 
 }  // namespace

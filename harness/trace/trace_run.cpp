@@ -6,7 +6,7 @@
 #include "core/util/input_error.h"
 #include "harness/crosscheck/hit_comparison.h"
 #include "harness/scenes/named_scene.h"
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 
 #include <fmt/core.h>
 

@@ -1,5 +1,6 @@
 #pragma once
-// A ray as text, for command lines that replay one ray bit for bit:
+// A ray as text, for command lines and messages that replay one ray bit for bit (`twinray trace --ray`, the
+// reproduce lines of `twinray grade`, a plugin failure's message):
 //
 //   "ox oy oz dx dy dz tmin tmax"
 //

@@ -1,10 +1,11 @@
-#include "harness/trace/ray_text.h"
+#include "core/geometry/ray_text.h"
 
 #include <fmt/core.h>
 
 #include <array>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 
@@ -52,10 +53,13 @@ Ray parse_ray(std::string_view text) {
 }
 
 std::string hex_float(float value) {
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  if (std::isnan(value)) return "nan";
-  // %a of the float promoted to double is exact; fmt's 'a' presentation gives the same digits.
-  return fmt::format("{:a}", value);
+  if (std::isnan(value)) return std::signbit(value) ? "-nan" : "nan";
+  if (std::isinf(value)) return value < 0.0f ? "-inf" : "inf";
+  // %a of the float promoted to double: exact, and normalised (a float denormal prints as 0x1.8p-140, not
+  // in the float's own denormal form), so one value has one spelling.
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%a", static_cast<double>(value));
+  return buffer;
 }
 
 std::string format_ray_hex(const Ray& r) {
