@@ -5,6 +5,7 @@
 
 #include "backends/plugin/isolated_plugin_backend.h"
 #include "backends/plugin/plugin_backend.h"
+#include "backends/plugin/sanitizer_build.h"
 #include "backends/registry.h"
 #include "cli_runner.h"
 #include "core/sampling/rng.h"
@@ -312,7 +313,9 @@ const QueryFailureCase kQueryFailures[] = {
     {"loop", TWINRAY_TEST_HOSTILE_LOOP_PLUGIN, PluginFailureKind::Timeout, "timeout", "", ""},
     {"alloc", TWINRAY_TEST_HOSTILE_ALLOC_PLUGIN, PluginFailureKind::Crash, "out-of-memory", "SIGSEGV", "", 0, true},
     {"exception", TWINRAY_TEST_THROWING_PLUGIN, PluginFailureKind::Crash, "exception", "", ""},
-    {"bad_alloc", TWINRAY_TEST_THROWING_BAD_ALLOC_PLUGIN, PluginFailureKind::Crash, "out-of-memory", "", "", 0, true},
+    // Under AddressSanitizer `new` does not throw std::bad_alloc: ASan reports out-of-memory and aborts.
+    {"bad_alloc", TWINRAY_TEST_THROWING_BAD_ALLOC_PLUGIN, PluginFailureKind::Crash, "out-of-memory",
+     kAddressSanitizer ? "SIGABRT" : "", "", 0, true},
     {"bad_hit", TWINRAY_TEST_HOSTILE_BAD_HIT_PLUGIN, PluginFailureKind::ContractViolation, "bad-hit", "", ""},
     {"open_read", TWINRAY_TEST_HOSTILE_OPEN_READ_PLUGIN, PluginFailureKind::Crash, "sandbox", "SIGSYS", "openat"},
     {"open_write", TWINRAY_TEST_HOSTILE_OPEN_WRITE_PLUGIN, PluginFailureKind::Crash, "sandbox", "SIGSYS", "openat"},
@@ -351,6 +354,16 @@ TEST(PluginIsolation, CapturedOutputIsTruncatedToTheLimitAndAttached) {
   EXPECT_TRUE(contains(out, "line 0000 of the hostile plugin")) << out.substr(0, 200);
   EXPECT_TRUE(contains(out, "line 1999 of the hostile plugin, padded to fifty bytes\n")) << out.substr(out.size() - 200);
   EXPECT_TRUE(contains(out, "bytes of output dropped")) << out;
+}
+
+// A line printed just before a crash is not lost in a stdio buffer (the worker's stdout is line-buffered).
+TEST(PluginIsolation, LastLinePrintedBeforeACrashIsKept) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_SEGV_PLUGIN, quick_limits());
+  plugin->build(isolation_scene());
+  const std::vector<Ray> rays = rays_with_trigger(1, 0);
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->occluded(rays[0]); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->output, "about to trace a ray with a zero direction component\n");
 }
 
 // ---- failures while loading and building ---------------------------------------------------------------------
@@ -393,6 +406,35 @@ TEST(PluginIsolation, ReadingOutsideTheLibraryFoldersInBuildIsRefusedByLandlock)
   } catch (const std::runtime_error& e) {
     EXPECT_TRUE(contains(e.what(), "could not open /etc/passwd: Permission denied")) << e.what();
   }
+}
+
+// A crash or a hang in create() (stage "load") comes out of the constructor as a PluginFailure.
+TEST(PluginIsolation, CrashOrHangInCreateIsReportedWithStageLoad) {
+  const std::optional<PluginFailure> crash =
+      failure_of([&] { make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_CREATE_CRASH_PLUGIN, quick_limits()); });
+  ASSERT_TRUE(crash.has_value());
+  EXPECT_EQ(crash->cause, "signal");
+  EXPECT_EQ(crash->signal_name, "SIGSEGV");
+  EXPECT_EQ(crash->stage, "load");
+  EXPECT_TRUE(contains(crash->what(), "libtwinray_hostile_create_crash_plugin.so")) << crash->what();
+
+  PluginLimits limits = quick_limits();
+  limits.build_seconds = 0.5;
+  const std::optional<PluginFailure> hang =
+      failure_of([&] { make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_CREATE_LOOP_PLUGIN, limits); });
+  ASSERT_TRUE(hang.has_value());
+  EXPECT_EQ(hang->kind, PluginFailureKind::Timeout);
+  EXPECT_EQ(hang->stage, "load");
+}
+
+// A crash in destroy() is reported by shutdown() (stage "destroy"); the destructor swallows it.
+TEST(PluginIsolation, CrashInDestroyIsReportedByShutdown) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_DESTROY_CRASH_PLUGIN, quick_limits());
+  plugin->build(isolation_scene());
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->shutdown(); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->signal_name, "SIGSEGV");
+  EXPECT_EQ(f->stage, "destroy");
 }
 
 // Load errors keep the in-process loader's messages (they are produced by the same code, in the worker).
@@ -462,7 +504,19 @@ std::size_t open_descriptors() {
   return n;
 }
 
-// Workers that end well or badly leave no descriptor (memfd, pipes, pidfd) and no thread behind.
+// Children of this process that still exist (running or not yet reaped), from /proc.
+std::size_t child_processes() {
+  std::size_t n = 0;
+  for (const auto& task : std::filesystem::directory_iterator("/proc/self/task")) {
+    std::ifstream children(task.path() / "children");
+    std::string pid;
+    while (children >> pid) ++n;
+  }
+  return n;
+}
+
+// Workers that end well or badly leave no descriptor (memfd, pipes, pidfd) and no process (not even a zombie)
+// behind.
 TEST(PluginIsolation, InstancesLeaveNoDescriptorsBehind) {
   const SceneGeometry g = isolation_scene();
   { const auto warm_up = make_isolated_plugin_backend(kIsoBrute, quick_limits()); }
@@ -475,6 +529,7 @@ TEST(PluginIsolation, InstancesLeaveNoDescriptorsBehind) {
     EXPECT_THROW(bad->occluded(rays_with_trigger(1, 0)[0]), PluginFailure);
   }
   EXPECT_EQ(open_descriptors(), before);
+  EXPECT_EQ(child_processes(), 0u);
 }
 
 }  // namespace

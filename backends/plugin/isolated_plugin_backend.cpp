@@ -94,11 +94,18 @@ std::vector<std::string> worker_environment(const PluginLimits& limits) {
     // soft_rss_limit_mb + can_use_proc_maps_statm=0: ASan's primary allocator serves small blocks from address
     //   space reserved at start, which RLIMIT_AS cannot limit; this limit on resident memory can (checked by
     //   ASan's background thread with getrusage, not by opening /proc, which the sandbox forbids).
+    // abort_on_error=1, symbolize=0, print_summary=0: an ASan report in the worker (a bug of ours, or `new`
+    //   beyond the memory limit, which ASan reports instead of throwing std::bad_alloc) must not need to open
+    //   files (the symbolizer would, and the sandbox would stop it half-way); it then ends the worker with
+    //   SIGABRT. Unsymbolized reports still name module and offset.
+    // detect_stack_use_after_return=0: its fake stacks are mapped lazily, and a mapping that fails at the
+    //   memory limit makes ASan read /proc/self/maps on its way out (forbidden); plugins are not instrumented
+    //   anyway, so it would only check the worker's own few frames.
     const std::size_t mb = std::max<std::size_t>(1, limits.memory_bytes >> 20);
     env.push_back("ASAN_OPTIONS=" + inherited("ASAN_OPTIONS") +
                   "detect_leaks=0:handle_segv=0:handle_sigbus=0:handle_sigfpe=0:handle_sigill=0:handle_abort=0:"
                   "handle_sigtrap=0:allow_user_segv_handler=1:allocator_may_return_null=1:can_use_proc_maps_statm=0:"
-                  "soft_rss_limit_mb=" + std::to_string(mb));
+                  "abort_on_error=1:symbolize=0:print_summary=0:detect_stack_use_after_return=0:soft_rss_limit_mb=" + std::to_string(mb));
     const std::string ubsan = inherited("UBSAN_OPTIONS");
     if (!ubsan.empty()) env.push_back("UBSAN_OPTIONS=" + ubsan.substr(0, ubsan.size() - 1));
   }
@@ -578,7 +585,8 @@ PluginFailureDetails IsolatedPluginBackend::Impl::classify_death(const WorkerTer
   if (d.stage.empty()) d.detail = "while no call was in progress (a thread of the plugin?)";
 
   if (t.exited) {
-    d.cause = "exit";
+    // exit() in a call in which an allocation had failed is how some plugins give up on memory.
+    d.cause = what == pw::kCrashExit && record.allocation_failed.load() != 0 ? "out-of-memory" : "exit";
     d.exit_code = t.exit_code;
     return d;
   }

@@ -15,7 +15,9 @@
 //          "timeout"       one call over PluginLimits::query_seconds / build_seconds, or past the deadline
 //          "exception"     a C++ exception escaped through the C ABI
 //          "bad-hit"       a hit on a geometry or primitive that does not exist (kind ContractViolation)
-//          "load"          the worker died while loading the library or in create(), for no reason above
+//          "load"          reserved: a plugin that cannot be loaded is an InputError (missing file, not a
+//                          library, no entry point, wrong ABI, NULL function, create() NULL), and one that
+//                          crashes or hangs while loading gets one of the causes above with stage "load"
 //   stage  "load" (dlopen, static constructors, create), "build", "intersect", "occluded", "destroy"
 
 #include "core/geometry/ray.h"

@@ -4,7 +4,7 @@
  * except on a trigger ray: one whose direction has an exactly zero component (the classic crash of a slab
  * test that divides by it). Then, by behaviour:
  *
- *   SEGV        writes through a null pointer              ALLOC       allocates (and touches) without bound
+ *   SEGV        prints a line, writes through a null ptr   ALLOC       allocates (and touches) without bound
  *   LOOP        loops forever                              BAD_HIT     reports a hit on geom_id 999
  *   ABORT       calls abort()                              OPEN_READ   opens a file for reading
  *   EXIT        calls exit(3)                              OPEN_WRITE  creates a file for writing
@@ -17,6 +17,7 @@
  *   BUILD_WRITE   tries to create a file in build
  *   CRASH_AT_100  like SEGV, but its trigger is the 100th query (for the command-line tests, whose rays
  *                 have no zero component)
+ *   CREATE_CRASH, CREATE_LOOP, DESTROY_CRASH   crash or loop in create(), crash in destroy()
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -32,9 +33,28 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-static void* hostile_create(void) { return calloc(1, 16); }
+void crash(void);
+void write_message(char* error, size_t capacity, const char* message);
 
-static void hostile_destroy(void* self) { free(self); }
+static void* hostile_create(void) {
+#ifdef TWINRAY_HOSTILE_CREATE_CRASH
+  crash();
+#endif
+#ifdef TWINRAY_HOSTILE_CREATE_LOOP
+  {
+    volatile unsigned long spins = 0;
+    for (;;) ++spins;
+  }
+#endif
+  return calloc(1, 16);
+}
+
+static void hostile_destroy(void* self) {
+#ifdef TWINRAY_HOSTILE_DESTROY_CRASH
+  crash();
+#endif
+  free(self);
+}
 
 /* Not static: each build uses only some helpers, and unused static functions would warn. The plugin exports
  * only the entry point either way (hidden visibility). */
@@ -132,6 +152,9 @@ static int is_trigger(const twinray_ray* ray) { return ray->dir[0] == 0.0f || ra
 
 /* What the behaviour does on a trigger ray. Returns 1 when it reports a hit (BAD_HIT). */
 static int misbehave(twinray_hit* hit) {
+#ifdef TWINRAY_HOSTILE_SEGV
+  printf("about to trace a ray with a zero direction component\n"); /* not flushed: the worker must keep it */
+#endif
 #if defined(TWINRAY_HOSTILE_SEGV) || defined(TWINRAY_HOSTILE_PRINT) || defined(TWINRAY_HOSTILE_CRASH_AT_100)
   crash();
 #endif

@@ -32,7 +32,8 @@ void on_fatal_signal(int sig, siginfo_t* info, void*) {
     g_record->thread.store(t_role);
     // The worker sets errno to 0 before every plugin call, so ENOMEM here means an allocation failed during
     // this call (malloc returns NULL with errno ENOMEM at the RLIMIT_AS limit); the crash is its consequence.
-    g_record->allocation_failed.store(saved_errno == ENOMEM ? 1u : 0u);
+    // Only ever set, never cleared: a sanitizer's out-of-memory report may have set it already.
+    if (saved_errno == ENOMEM) g_record->allocation_failed.store(1);
     if (sig == SIGSYS) g_record->syscall.store(info->si_syscall);
   }
   // SA_RESETHAND has already restored the default action. Re-raise for this thread: the signal is blocked
@@ -42,7 +43,11 @@ void on_fatal_signal(int sig, siginfo_t* info, void*) {
 }
 
 void on_exit_called() {
-  if (claim(kCrashExit)) g_record->thread.store(t_role);
+  const int saved_errno = errno;
+  if (claim(kCrashExit)) {
+    g_record->thread.store(t_role);
+    if (saved_errno == ENOMEM) g_record->allocation_failed.store(1);
+  }
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "backends/plugin/worker/seccomp_filter.h"
 
+#include "backends/plugin/sanitizer_build.h"
+
 #include <sys/ioctl.h>  // TCGETS, TIOCGWINSZ
 #include <fcntl.h>
 #include <linux/sched.h>   // CLONE_THREAD
@@ -37,6 +39,11 @@ struct Builder {
   }
 };
 
+// One argument comparison (libseccomp's SCMP_A0..SCMP_A5 macros are C99 compound literals).
+constexpr scmp_arg_cmp arg(unsigned index, scmp_compare op, scmp_datum_t a, scmp_datum_t b = 0) {
+  return scmp_arg_cmp{index, op, a, b};
+}
+
 #define ALLOW(name) b.allow(SCMP_SYS(name), #name)
 #define ALLOW_IF(name, cmp) b.allow_if(SCMP_SYS(name), #name, cmp)
 
@@ -52,9 +59,10 @@ void allow_running(Builder& b) {
   ALLOW(madvise);
   // Threads: std::thread / pthread_create is clone with CLONE_THREAD (a new process is not), plus what glibc
   // sets up per thread and what mutexes and condition variables wait on.
-  ALLOW_IF(clone, SCMP_A0(SCMP_CMP_MASKED_EQ, CLONE_THREAD, CLONE_THREAD));
-  b.add(SCMP_ACT_ERRNO(ENOSYS), SCMP_SYS(clone3), "clone3", 0, nullptr);  // its flags live in memory a filter
-                                                                           // cannot read; glibc falls back to clone
+  ALLOW_IF(clone, arg(0, SCMP_CMP_MASKED_EQ, CLONE_THREAD, CLONE_THREAD));
+  // clone3 passes its flags in memory, which a filter cannot read: "not implemented", and glibc falls back to
+  // clone, whose flags are checked above.
+  b.add(SCMP_ACT_ERRNO(ENOSYS), SCMP_SYS(clone3), "clone3", 0, nullptr);
   ALLOW(futex);
   ALLOW(set_robust_list);
   ALLOW(rseq);
@@ -71,14 +79,14 @@ void allow_running(Builder& b) {
   ALLOW(getcpu);
   // Signals: handlers and masks (a plugin may install its own), returning from handlers, alternate stacks.
   // Only SIGSYS is off limits: its handler is how a forbidden call is reported.
-  ALLOW_IF(rt_sigaction, SCMP_A0(SCMP_CMP_NE, SIGSYS));
+  ALLOW_IF(rt_sigaction, arg(0, SCMP_CMP_NE, SIGSYS));
   ALLOW(rt_sigprocmask);
   ALLOW(rt_sigreturn);
   ALLOW(sigaltstack);
   ALLOW(restart_syscall);
   // abort() and raise() signal the calling thread; the crash recorder re-raises a fatal signal the same way.
   // Only threads of this process (tgkill's first argument is the process id).
-  ALLOW_IF(tgkill, SCMP_A0(SCMP_CMP_EQ, static_cast<scmp_datum_t>(getpid())));
+  ALLOW_IF(tgkill, arg(0, SCMP_CMP_EQ, static_cast<scmp_datum_t>(getpid())));
   // Time: mostly served by the vDSO without a system call; these are the fallbacks and sleeps.
   ALLOW(clock_gettime);
   ALLOW(clock_getres);
@@ -99,7 +107,7 @@ void allow_running(Builder& b) {
   ALLOW(close);
   ALLOW(fstat);
   // glibc's fstat is newfstatat(fd, "", AT_EMPTY_PATH); with a path it would tell whether files exist.
-  ALLOW_IF(newfstatat, SCMP_A3(SCMP_CMP_MASKED_EQ, AT_EMPTY_PATH, AT_EMPTY_PATH));
+  ALLOW_IF(newfstatat, arg(3, SCMP_CMP_MASKED_EQ, AT_EMPTY_PATH, AT_EMPTY_PATH));
   ALLOW(fcntl);
   ALLOW(dup);
   ALLOW(dup2);
@@ -107,10 +115,10 @@ void allow_running(Builder& b) {
   ALLOW(poll);
   ALLOW(ppoll);
   // isatty() (stdio decides on buffering) and the terminal's width: harmless queries, on a pipe they fail.
-  ALLOW_IF(ioctl, SCMP_A1(SCMP_CMP_EQ, TCGETS));
-  ALLOW_IF(ioctl, SCMP_A1(SCMP_CMP_EQ, TIOCGWINSZ));
+  ALLOW_IF(ioctl, arg(1, SCMP_CMP_EQ, TCGETS));
+  ALLOW_IF(ioctl, arg(1, SCMP_CMP_EQ, TIOCGWINSZ));
   // Reading limits (getrlimit is prlimit64 with no new limit); setting them is not allowed.
-  ALLOW_IF(prlimit64, SCMP_A2(SCMP_CMP_EQ, 0));
+  ALLOW_IF(prlimit64, arg(2, SCMP_CMP_EQ, 0));
   ALLOW(getrlimit);
   // Facts about the system: sysconf (memory size, CPU count), uname, ids.
   ALLOW(sysinfo);
@@ -121,15 +129,15 @@ void allow_running(Builder& b) {
   ALLOW(getegid);
   ALLOW(getrandom);  // std::random_device
   // Thread names (pthread_setname_np on the calling thread).
-  ALLOW_IF(prctl, SCMP_A0(SCMP_CMP_EQ, PR_SET_NAME));
-  ALLOW_IF(prctl, SCMP_A0(SCMP_CMP_EQ, PR_GET_NAME));
+  ALLOW_IF(prctl, arg(0, SCMP_CMP_EQ, PR_SET_NAME));
+  ALLOW_IF(prctl, arg(0, SCMP_CMP_EQ, PR_GET_NAME));
 }
 
 // What loading a library (dlopen, its dependencies, static constructors, create and build) adds.
 void allow_loading(Builder& b) {
   // Opening files read-only; which files is Landlock's decision (landlock_rules.h). Creating, truncating,
   // writing and appending are refused here whatever Landlock says.
-  ALLOW_IF(openat, SCMP_A2(SCMP_CMP_MASKED_EQ, O_ACCMODE | O_CREAT | O_TRUNC | O_APPEND, O_RDONLY));
+  ALLOW_IF(openat, arg(2, SCMP_CMP_MASKED_EQ, O_ACCMODE | O_CREAT | O_TRUNC | O_APPEND, O_RDONLY));
   ALLOW(newfstatat);  // any path: the loader stats candidates
   ALLOW(statx);
   ALLOW(access);      // /etc/ld.so.preload
@@ -143,6 +151,13 @@ void allow_loading(Builder& b) {
   ALLOW(seccomp);
 }
 
+// What AddressSanitizer's runtime does in the worker of a sanitizer build (scripts/sanitize.sh), besides what
+// is allowed above: it checks whether memory is readable by writing it into a pipe (IsAccessibleMemoryRange,
+// used while loading libraries and unwinding).
+void allow_sanitizer_runtime(Builder& b) {
+  ALLOW(pipe2);
+}
+
 #undef ALLOW
 #undef ALLOW_IF
 
@@ -154,6 +169,7 @@ std::string install_seccomp_filter(FilterPhase phase) {
   Builder b{ctx.get()};
   allow_running(b);
   if (phase == FilterPhase::Loading) allow_loading(b);
+  if constexpr (kAddressSanitizer) allow_sanitizer_runtime(b);
   if (b.error != 0) return std::string("seccomp rule for ") + b.failed + ": " + std::strerror(-b.error);
   // TSYNC: the filter reaches every thread, including the query threads and the plugin's own.
   seccomp_attr_set(ctx.get(), SCMP_FLTATR_CTL_TSYNC, 1);

@@ -20,6 +20,7 @@
 #include "backends/plugin/worker/landlock_rules.h"
 #include "backends/plugin/worker/query_server.h"
 #include "backends/plugin/worker/resource_limits.h"
+#include "backends/plugin/worker/sanitizer_hooks.h"
 #include "backends/plugin/worker/seccomp_filter.h"
 #include "backends/plugin/worker_protocol.h"
 #include "core/util/input_error.h"
@@ -31,6 +32,7 @@
 #include <unistd.h>
 
 #include <climits>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -96,7 +98,12 @@ int main(int argc, char** argv) {
   // and still let four threads allocate without contention (queries should not allocate at all).
   mallopt(M_ARENA_MAX, 4);
 
+  // stdout is a pipe, which stdio would buffer in 4 KiB blocks: the last lines a plugin prints before it
+  // crashes would be lost with the buffer. Line buffering keeps them (std::cout shares stdio's buffer).
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+
   pw::install_crash_recorder(header.crash);
+  pw::install_sanitizer_hooks(header.crash);
   pw::set_thread_role(pw::kMainThread);
   pw::install_alternate_signal_stack();
 
@@ -120,7 +127,11 @@ int main(int argc, char** argv) {
   pw::QueryServer server(block, pw::kControlFd, [seccomp_active] {
     return seccomp_active ? pw::install_seccomp_filter(pw::FilterPhase::Querying) : std::string();
   });
-  server.start_threads();
+  try {
+    server.start_threads();
+  } catch (const std::exception& e) {  // std::system_error: no memory for 16 stacks under a tiny limit
+    setup_failed(header, std::string("cannot start the query threads (is the memory limit too low?): ") + e.what());
+  }
 
   std::unique_ptr<twinray::PluginLibrary> plugin;
   header.loading.store(1);
