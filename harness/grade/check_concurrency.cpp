@@ -12,7 +12,9 @@
 #include <fmt/core.h>
 
 #include <bit>
+#include <chrono>
 #include <exception>
+#include <latch>
 #include <mutex>
 #include <thread>
 
@@ -22,9 +24,11 @@ namespace {
 
 constexpr std::size_t kDefaultRays = 20000;
 constexpr std::size_t kDefaultDeterminismRays = 10000;  // per kind
-// Rays per call: small enough that threads interleave many times per round, large enough that the cost of
-// reaching the plugin's worker stays small against the work.
-constexpr std::size_t kChunk = 256;
+// Rays per call. A race shows only while two calls are inside the plugin at once, so each call must be long
+// against the cost of reaching the worker (which under a sanitizer build of twinray is most of a small call):
+// at 256 rays per call the racy test plugin went undetected there; at 2048 the threads' calls overlap for
+// most of their length. Still several calls per thread, starting at different places.
+constexpr std::size_t kChunk = 2048;
 
 bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
 
@@ -74,13 +78,29 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
   std::size_t differing = 0, compared = 0;
   std::string first;
   std::optional<std::size_t> first_ray;
-  for (int round = 0; round < ctx.spec.repeat; ++round) {
+  // At least `repeat` rounds, and more until `min_seconds` of concurrent work are done: a race shows only while
+  // two threads are inside the plugin at once, which on a busy two-core machine can be rare. Never more than
+  // half of the time left before the deadline is spent on extra rounds.
+  const auto started = std::chrono::steady_clock::now();
+  int rounds = 0;
+  const auto more_rounds = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    if (rounds < ctx.spec.repeat) return true;
+    const double elapsed = std::chrono::duration<double>(now - started).count();
+    const double per_round = elapsed / rounds;
+    const double left = std::chrono::duration<double>(ctx.deadline - now).count();
+    return elapsed < ctx.spec.min_seconds && per_round < 0.5 * left;
+  };
+  for (; more_rounds(); ++rounds) {
     std::vector<Answers> results(threads);
     std::vector<std::exception_ptr> failures(threads);
     {
+      // Every thread waits at the latch, so all of them reach the plugin together.
+      std::latch start(static_cast<std::ptrdiff_t>(threads));
       std::vector<std::jthread> pool;
       for (std::size_t t = 0; t < threads; ++t)
         pool.emplace_back([&, t] {
+          start.arrive_and_wait();
           try {
             trace_rotated(*plugin, rays, t * chunks / threads, results[t]);
           } catch (...) {
@@ -96,7 +116,7 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
       differing += d.count;
       compared += rays.size();
       if (d.first && first.empty()) {
-        first = fmt::format("round {}, thread {}, ray {}: alone {}, concurrently {}", round + 1, t + 1, *d.first,
+        first = fmt::format("round {}, thread {}, ray {}: alone {}, concurrently {}", rounds + 1, t + 1, *d.first,
                             describe_hit(single.hits[*d.first]), describe_hit(results[t].hits[*d.first]));
         first_ray = d.first;
       }
@@ -105,11 +125,11 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
 
   CheckVerdict v;
   v.passed = differing == 0;
-  v.figures = {{"rays", rays.size()}, {"threads", threads}, {"rounds", ctx.spec.repeat}, {"answers_compared", compared},
+  v.figures = {{"rays", rays.size()}, {"threads", threads}, {"rounds", rounds}, {"answers_compared", compared},
                {"differing", differing}};
   if (v.passed) {
     v.detail = fmt::format("{} rays on {} threads at once, {} rounds: every answer bit-identical to one thread's",
-                           rays.size(), threads, ctx.spec.repeat);
+                           rays.size(), threads, rounds);
   } else {
     v.detail = fmt::format("{} of {} concurrent answers differ from the single-threaded ones ({} threads); first: {}",
                            differing, compared, threads, first);

@@ -112,7 +112,7 @@ std::vector<std::string_view> parameters_of(Category c) {
     case Category::Watertight: return {"count", "origin"};
     case Category::Spheres: return {"count", "reference"};
     case Category::Ties: return {"count"};
-    case Category::ThreadSafety: return {"rays", "count", "threads", "repeat"};
+    case Category::ThreadSafety: return {"rays", "count", "threads", "repeat", "min_seconds"};
     case Category::Determinism: return {"rays", "count"};
     case Category::Performance: return {"rays", "count", "thresholds"};
     case Category::TreeQuality: return {"rays", "count", "thresholds"};
@@ -226,6 +226,10 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
   }
   if (auto n = node.optional_member("threads")) c.threads = static_cast<int>(n->as_integer(2, 64));
   if (auto n = node.optional_member("repeat")) c.repeat = static_cast<int>(n->as_integer(1, 100));
+  if (auto n = node.optional_member("min_seconds")) {
+    c.min_seconds = n->as_double();
+    if (!(c.min_seconds >= 0.0) || c.min_seconds > kMaxTimeLimit) n->fail("min_seconds is a number of seconds, at least 0");
+  }
   if (auto n = node.optional_member("origin")) c.origin = n->as_vec3();
   if (auto n = node.optional_member("thresholds")) c.thresholds = thresholds_of(*n, c.category);
   if (c.category == Category::ClosestHit)

@@ -68,7 +68,8 @@ struct CheckSpec {
   Reference reference = Reference::Embree;
   bool image = false;                      // closest-hit with camera rays: write the disagreement PNG
   int threads = 8;                         // thread-safety
-  int repeat = 2;                          // thread-safety
+  int repeat = 2;                          // thread-safety: at least this many rounds...
+  double min_seconds = 1.0;                // ...and more until this much concurrent work is done
   std::optional<glm::vec3> origin;         // watertight: the interior point rays start from
   Thresholds thresholds;
 };
