@@ -56,7 +56,7 @@ TEST(GradeSuite, BundledSuitesLoadByName) {
 TEST(GradeSuite, ParsesEveryField) {
   const auto dir = write_manifest("fields", manifest_with(R"(
     {"name": "second", "category": "closest-hit", "scene": "c", "points": 2.5, "required": false,
-     "visibility": "after_due_date", "time_limit": 7, "memory_limit_mib": 512, "seed": 9, "needs": ["first"],
+     "visibility": "after_due_date", "time_limit": 7, "ray_time_limit": 0.5, "memory_limit_mib": 512, "seed": 9, "needs": ["first"],
      "rays": ["camera", "diffuse"], "count": 1000, "reference": "brute", "image": true, "description": "d"})"));
   const Suite s = parse_suite_manifest(dir / kManifestName);
   ASSERT_EQ(s.checks.size(), 2u);
@@ -66,6 +66,8 @@ TEST(GradeSuite, ParsesEveryField) {
   EXPECT_EQ(c.requirement, Requirement::Optional);
   EXPECT_EQ(c.visibility, Visibility::AfterDueDate);
   EXPECT_EQ(c.time_limit_seconds, 7.0);
+  EXPECT_EQ(c.ray_time_limit_seconds, 0.5);
+  EXPECT_EQ(s.checks[0].ray_time_limit_seconds, 2.0);  // the default
   EXPECT_EQ(c.memory_limit_bytes, std::size_t{512} << 20);
   EXPECT_EQ(c.seed, 9u);
   EXPECT_EQ(c.needs, std::vector<std::string>{"first"});

@@ -32,7 +32,7 @@ struct CheckContext {
   const CheckEnvironment& env;
   std::chrono::steady_clock::time_point deadline;
 
-  LaunchLimits limits() const { return {deadline, spec.memory_limit_bytes}; }
+  LaunchLimits limits() const { return {deadline, spec.memory_limit_bytes, spec.ray_time_limit_seconds}; }
   // A fresh plugin instance, built on the check's scene.
   std::unique_ptr<Backend> built_plugin() const;
   // The built-in backend the check's answers are compared with.

@@ -10,12 +10,12 @@ namespace twinray::grade {
 
 namespace {
 
-// The limits of one check: its deadline bounds every call, build included. The per-call limits stay at the
-// isolated backend's defaults (PluginLimits), far above any check's time limit, so the deadline decides.
+// The limits of one check: its deadline bounds all work, build included; one ray has its own, shorter limit.
 PluginLimits limits_of(const LaunchLimits& l) {
   PluginLimits limits;
   limits.deadline = l.deadline;
   if (l.memory_bytes != 0) limits.memory_bytes = l.memory_bytes;
+  if (l.ray_seconds > 0.0) limits.query_seconds = l.ray_seconds;
   return limits;
 }
 

@@ -22,6 +22,7 @@ namespace twinray::grade {
 struct LaunchLimits {
   std::chrono::steady_clock::time_point deadline;  // the end of the check's wall-clock budget
   std::size_t memory_bytes = 0;                    // 0: the backend's default
+  double ray_seconds = 0.0;                        // one call into the plugin (one ray); 0: the backend's default
 };
 
 class PluginLauncher {

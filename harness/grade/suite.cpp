@@ -20,11 +20,16 @@ namespace {
 constexpr double kDefaultTimeLimit = 60.0;                               // seconds per check, build included
 constexpr std::size_t kDefaultMemoryLimitMiB = 4096;                     // the plugin's worker process
 constexpr double kMaxTimeLimit = 3600.0;
+// One ray is one call into the plugin. Two seconds is a thousand times what a brute-force loop over a
+// million triangles takes, so only a plugin stuck in a loop reaches it, and it is found in seconds rather
+// than at the end of the check's whole budget.
+constexpr double kDefaultRayTimeLimit = 2.0;
 constexpr std::int64_t kMaxMemoryLimitMiB = 1 << 20;                     // 1 TiB
 constexpr std::int64_t kMaxRays = 10'000'000;                            // per kind, like crosscheck --rays
 
 struct Defaults {
   double time_limit = kDefaultTimeLimit;
+  double ray_time_limit = kDefaultRayTimeLimit;
   std::size_t memory_limit_bytes = kDefaultMemoryLimitMiB << 20;
   Visibility visibility = Visibility::Visible;
   std::uint64_t seed = 1;
@@ -54,9 +59,10 @@ Visibility visibility_of(const JsonNode& node) {
 }
 
 Defaults parse_defaults(const JsonNode& node) {
-  node.expect_object({"time_limit", "memory_limit_mib", "visibility", "seed"});
+  node.expect_object({"time_limit", "ray_time_limit", "memory_limit_mib", "visibility", "seed"});
   Defaults d;
   if (auto n = node.optional_member("time_limit")) d.time_limit = time_limit_of(*n);
+  if (auto n = node.optional_member("ray_time_limit")) d.ray_time_limit = time_limit_of(*n);
   if (auto n = node.optional_member("memory_limit_mib")) d.memory_limit_bytes = memory_limit_of(*n);
   if (auto n = node.optional_member("visibility")) d.visibility = visibility_of(*n);
   if (auto n = node.optional_member("seed")) d.seed = n->as_unsigned();
@@ -151,9 +157,9 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
     for (Category c : kAllCategories) all += (all.empty() ? "" : ", ") + std::string(to_string(c));
     category_node.fail(fmt::format("unknown category (choose from {})", all));
   }
-  std::vector<std::string_view> allowed = {"name",       "category",         "scene",      "points", "required",
-                                           "visibility", "time_limit", "memory_limit_mib", "seed",   "needs",
-                                           "description"};
+  std::vector<std::string_view> allowed = {"name",       "category",   "scene",          "points",
+                                           "required",   "visibility", "time_limit",     "ray_time_limit",
+                                           "memory_limit_mib", "seed", "needs",          "description"};
   for (std::string_view p : parameters_of(*category)) allowed.push_back(p);
   // expect_object takes an initializer list; check the keys here with the same message shape.
   for (const auto& [key, value] : node.json().items()) {
@@ -195,6 +201,8 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
   if (auto n = node.optional_member("visibility")) c.visibility = visibility_of(*n);
   c.time_limit_seconds = defaults.time_limit;
   if (auto n = node.optional_member("time_limit")) c.time_limit_seconds = time_limit_of(*n);
+  c.ray_time_limit_seconds = defaults.ray_time_limit;
+  if (auto n = node.optional_member("ray_time_limit")) c.ray_time_limit_seconds = time_limit_of(*n);
   c.memory_limit_bytes = defaults.memory_limit_bytes;
   if (auto n = node.optional_member("memory_limit_mib")) c.memory_limit_bytes = memory_limit_of(*n);
   c.seed = defaults.seed;

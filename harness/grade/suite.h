@@ -58,6 +58,7 @@ struct CheckSpec {
   Requirement requirement = Requirement::Required;
   Visibility visibility = Visibility::Visible;
   double time_limit_seconds = 60.0;
+  double ray_time_limit_seconds = 2.0;  // one ray (one call into the plugin): what finds an endless loop fast
   std::size_t memory_limit_bytes = 0;
   std::uint64_t seed = 1;
   std::vector<std::string> needs;  // earlier checks that must pass first

@@ -550,6 +550,9 @@ int scotty_intersect1(const void* self, const twinray_ray* r, twinray_hit* hit, 
 }
 
 int scotty_occluded1(const void* self, const twinray_ray* r, twinray_query_stats* stats) {
+#if BUG(10)
+  try_to_cheat();
+#endif
   return static_cast<const BVH*>(self)->any_hit(to_ray(r), *stats) ? 1 : 0;
 }
 
