@@ -4,6 +4,8 @@
 #include "cli/commands.h"
 #include "harness/converge/converge_output.h"
 #include "harness/converge/convergence_study.h"
+#include "harness/converge/peer_series.h"
+#include "harness/compare/mitsuba_peer.h"
 #include "harness/converge/reference_cache.h"
 #include "core/image/image_io.h"
 #include "core/scene/scene_loader.h"
@@ -33,6 +35,7 @@ struct ConvergeCommandOptions {
   std::string out;
   std::optional<std::uint64_t> seed;
   int threads = 0;
+  std::string peer;  // "mitsuba": add Mitsuba's curve
 };
 
 constexpr int kDefaultReferenceSpp = 1024;
@@ -64,6 +67,11 @@ int run_converge(const ConvergeCommandOptions& opt) {
   if (!opt.reference.empty() && opt.reference_spp) return report_bad_input("converge", "--reference and --reference-spp are exclusive");
   if (opt.reference_spp && *opt.reference_spp < 1) return report_bad_input("converge", "--reference-spp must be at least 1");
   if (opt.threads < 0) return report_bad_input("converge", "--threads must be positive (0 = all cores)");
+  if (!opt.peer.empty() && opt.peer != "mitsuba") return report_bad_input("converge", "unknown --peer '" + opt.peer + "' (expected mitsuba)");
+  if (!opt.peer.empty()) {
+    std::string why;
+    if (!compare::probe_mitsuba(&why)) return report_bad_input("converge", why);
+  }
 
   const Scene scene = load_scene(opt.scene);
   for (const converge::StrategySpec& s : settings.strategies)
@@ -72,6 +80,7 @@ int run_converge(const ConvergeCommandOptions& opt) {
                        " has no environment map");
   settings.budget_seconds = opt.budget_seconds;
   settings.max_depth = scene.render.max_depth;
+  settings.rr_depth = scene.render.rr_depth;
   settings.seed = opt.seed.value_or(scene.render.seed);
 
   std::optional<tbb::global_control> thread_limit;
@@ -124,11 +133,14 @@ int run_converge(const ConvergeCommandOptions& opt) {
 
   const std::filesystem::path out = opt.out.empty() ? std::filesystem::path("converge-" + std::filesystem::path(opt.scene).stem().string())
                                                     : std::filesystem::path(opt.out);
-  const std::vector<converge::ConvergeSeries> series =
-      converge::run_study(scene, reference, settings, [](const std::string& line) {
-        fmt::print("point        {}\n", line);
-        std::fflush(stdout);
-      });
+  auto log_point = [](const std::string& line) {
+    fmt::print("point        {}\n", line);
+    std::fflush(stdout);
+  };
+  std::vector<converge::ConvergeSeries> series = converge::run_study(scene, reference, settings, log_point);
+  if (opt.peer == "mitsuba")
+    series.push_back(converge::mitsuba_series(scene, reference, settings, out / "mitsuba",
+                                              static_cast<int>(study.threads), log_point));
   const bool plotted = converge::write_study_outputs(out, study, series, reference);
   for (const converge::ConvergeSeries& s : series)
     fmt::print("slope        {:<24} {}\n", converge::series_label(s),
@@ -156,6 +168,7 @@ void add_converge_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--out", opt->out, "Output folder (default converge-SCENE-STEM)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
   cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--peer", opt->peer, "Also plot a peer renderer's curve: mitsuba (docs/mitsuba.md)");
   cmd->callback([opt, &run] { run = [opt] { return run_converge(*opt); }; });
 }
 

@@ -49,6 +49,7 @@ int run_info(const InfoOptions& opt) {
   const Bounds3 b = g.bounds();
 
   fmt::print("scene:        {}{}\n", scene.source.string(), scene.from_bare_mesh ? " (bare mesh in a default scene)" : "");
+  for (const std::string& a : scene.additions) fmt::print("added:        {}\n", a);
   fmt::print("shapes:       {} ({} meshes, {} spheres)\n", scene.shapes.size(), g.meshes.size(), g.spheres.size());
   fmt::print("triangles:    {}\n", g.triangle_count());
   fmt::print("skipped:      {} degenerate triangles, {} with non-finite vertices\n", scene.report.degenerate_triangles,
@@ -96,6 +97,7 @@ int run_info(const InfoOptions& opt) {
   if (!opt.json.empty()) {
     nlohmann::json j = {{"scene", scene.source.string()},
                         {"from_bare_mesh", scene.from_bare_mesh},
+                        {"additions", scene.additions},
                         {"shapes", scene.shapes.size()},
                         {"meshes", g.meshes.size()},
                         {"triangles", g.triangle_count()},

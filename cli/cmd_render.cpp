@@ -29,10 +29,11 @@ struct RenderCommandOptions {
   std::string integrator = "path";
   std::string strategy = "mis";
   std::string env_sampling = "importance";
+  std::string sampler = "sobol";
   std::optional<int> spp;
   std::optional<double> time_seconds;
   std::optional<int> max_depth;
-  int rr_depth = 5;
+  std::optional<int> rr_depth;
   std::optional<std::uint64_t> seed;
   int threads = 0;
   std::string output;
@@ -86,12 +87,14 @@ int run_render(const RenderCommandOptions& opt) {
   if (opt.env_sampling == "importance") ro.env_importance_sampling = true;
   else if (opt.env_sampling == "uniform") ro.env_importance_sampling = false;
   else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
+  if (const std::optional<SamplerKind> k = parse_sampler_kind(opt.sampler)) ro.sampler = *k;
+  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol, independent)");
   if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
   if (opt.spp && *opt.spp < 1) return report_bad_input("render", "--spp must be at least 1");
   if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return report_bad_input("render", "--time must be positive");
   if (opt.max_depth && (*opt.max_depth == 0 || *opt.max_depth < -1))
     return report_bad_input("render", "--max-depth must be -1 (unlimited) or at least 1");
-  if (opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
+  if (opt.rr_depth && *opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
   if (opt.threads < 0) return report_bad_input("render", "--threads must be positive (0 = all cores)");
   std::string aux_error;
   const std::optional<AuxChannels> aux = parse_aux(opt.aux, aux_error);
@@ -114,11 +117,12 @@ int run_render(const RenderCommandOptions& opt) {
     }
     scene.environment.type = EnvironmentType::Image;
     scene.environment.image = std::filesystem::absolute(opt.env);
+    scene.environment.pixels.reset();
   }
   ro.spp = opt.spp.value_or(scene.render.spp);
   ro.time_budget_seconds = opt.time_seconds.value_or(0.0);
   ro.settings.max_depth = opt.max_depth.value_or(scene.render.max_depth);
-  ro.settings.rr_depth = opt.rr_depth;
+  ro.settings.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   ro.seed = opt.seed.value_or(scene.render.seed);
   ro.aux = *aux;
   if (ro.spp < 1) return report_bad_input("render", "the scene's render.spp must be at least 1");
@@ -181,7 +185,8 @@ int run_render(const RenderCommandOptions& opt) {
              static_cast<double>(build.memory_bytes) / (1024.0 * 1024.0));
   fmt::print("integrator   {} (strategy {}, env sampling {}, max depth {}, rr depth {})\n", to_string(ro.integrator),
              to_string(ro.settings.strategy), opt.env_sampling, depth_text, ro.settings.rr_depth);
-  fmt::print("image        {}x{}, {} spp, seed {}, {} threads\n", image.width, image.height, st.spp, ro.seed, threads);
+  fmt::print("image        {}x{}, {} spp, seed {}, sampler {}, {} threads\n", image.width, image.height, st.spp, ro.seed,
+             to_string(ro.sampler), threads);
   for (const FeatureNote& n : features.notes)
     fmt::print("feature      {}: {}\n", n.name, n.used ? "used" : "left out (" + n.reason + ")");
   fmt::print("time         {:.3f} s\n", st.seconds);
@@ -213,6 +218,7 @@ int run_render(const RenderCommandOptions& opt) {
         {"height", image.height},
         {"spp", st.spp},
         {"seed", ro.seed},
+        {"sampler", to_string(ro.sampler)},
         {"threads", threads},
         {"time_budget_seconds", ro.time_budget_seconds > 0.0 ? nlohmann::json(ro.time_budget_seconds) : nlohmann::json(nullptr)},
         {"build_seconds", build.build_seconds},
@@ -258,8 +264,10 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--time", opt->time_seconds, "Render passes of 1 spp until SECONDS have passed (instead of --spp)");
   cmd->add_option("--max-depth", opt->max_depth, "Path segments: 1 emitters only, 2 direct light, -1 unlimited "
                                                  "(default: the scene's render.max_depth)");
-  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on")->capture_default_str();
+  cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
+  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol (Owen-scrambled, default) or independent")
+      ->capture_default_str();
   cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->capture_default_str();
   cmd->add_option("-o,--output", opt->output, "Linear float EXR (default SCENE-STEM.exr when no --png is given)");
   cmd->add_option("--png", opt->png, "sRGB 8-bit PNG");

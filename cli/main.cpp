@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   add_stress_command(app, run);
   add_converge_command(app, run);
   add_report_command(app, run);
+  add_export_command(app, run);
+  add_compare_command(app, run);
   add_trace_command(app, run);
   add_grade_command(app, run);
 

@@ -16,6 +16,7 @@ PACKAGES=(
   nlohmann-json3-dev     # scene format
   libcli11-dev           # command line
   libfmt-dev
+  libpugixml-dev         # XML: Mitsuba 3 scenes (twinray export, .xml scenes)
   libseccomp-dev         # the plugin worker's system-call sandbox (backends/plugin/worker)
   libxml2-utils          # xmllint: the tests validate twinray grade's JUnit XML against an XSD
   python3-jsonschema     # the tests validate twinray grade's Gradescope results.json against a JSON schema

@@ -222,3 +222,34 @@ TEST(Mis, WeightsOfLightAndBsdfSamplingSumToOne) {
 
 }  // namespace
 }  // namespace twinray
+
+namespace twinray {
+namespace {
+
+// Material::two_sided = false (Mitsuba's BSDFs without `twosided`): the front scatters as before, the back
+// is black for evaluation, density and sampling.
+TEST(OneSidedBsdf, BackIsBlack) {
+  const glm::vec3 ng(0, 0, 1), front(0, 0.6f, 0.8f), back(0, 0.6f, -0.8f), wi_front(0.6f, 0, 0.8f), wi_back(0.6f, 0, -0.8f);
+  for (MaterialType type : {MaterialType::Diffuse, MaterialType::Mirror}) {
+    Material m;
+    m.type = type;
+    m.albedo = glm::vec3(0.5f);
+    m.reflectance = glm::vec3(0.5f);
+    m.two_sided = false;
+    const Bsdf one = Bsdf::from_material(m);
+    m.two_sided = true;
+    const Bsdf two = Bsdf::from_material(m);
+    EXPECT_TRUE(one.is_one_sided());
+    EXPECT_FALSE(two.is_one_sided());
+    EXPECT_TRUE(one.sample(front, ng, 0.5f, {0.3f, 0.7f}).has_value());
+    EXPECT_FALSE(one.sample(back, ng, 0.5f, {0.3f, 0.7f}).has_value());
+    EXPECT_TRUE(two.sample(back, ng, 0.5f, {0.3f, 0.7f}).has_value());
+    EXPECT_EQ(one.eval(back, wi_back, ng), glm::vec3(0.0f));
+    EXPECT_EQ(one.pdf(back, wi_back, ng), 0.0f);
+    EXPECT_EQ(one.eval(front, wi_front, ng), two.eval(front, wi_front, ng));
+    EXPECT_EQ(two.eval(back, wi_back, ng), two.eval(front, wi_front, ng));
+  }
+}
+
+}  // namespace
+}  // namespace twinray

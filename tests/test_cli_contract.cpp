@@ -168,5 +168,31 @@ TEST(CliContract, CrosscheckAcceptsCorrectPlugin) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
+TEST(CliContract, ExportWritesAMitsubaSceneThatLoadsBack) {
+  const auto dir = scratch_dir("export");
+  const CommandResult r = run_twinray("export " + quoted(source_path("scenes/cornell-mirror-glass.json")) +
+                                      " --to mitsuba " + quoted(dir / "out") + " --spp 16");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "scene.xml"));
+  const CommandResult info = run_twinray("info " + quoted(dir / "out" / "scene.xml"));
+  EXPECT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("spp 16"), std::string::npos) << info.output;
+  const CommandResult bad = run_twinray("export " + quoted(source_path("scenes/cornell-box.json")) + " --to pbrt " +
+                                        quoted(dir / "other"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("unknown format 'pbrt'"), std::string::npos) << bad.output;
+}
+
+TEST(CliContract, CompareWithoutMitsubaSaysWhichScriptInstallsIt) {
+  const auto dir = scratch_dir("compare-missing");
+  for (const std::string& command : {std::string("compare ") + quoted(source_path("scenes/cornell-box.json")) + " --spp 8 --out " + quoted(dir / "c"),
+                                     std::string("converge ") + quoted(source_path("scenes/cornell-box.json")) + " --peer mitsuba --budget 1 --out " + quoted(dir / "v")}) {
+    const CommandResult r = run_twinray(command, "TWINRAY_MITSUBA_VENV=" + (dir / "no-venv").string() + " ");
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_NE(r.output.find("scripts/setup-mitsuba.sh"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c")) << "no output on bad input";
+  }
+}
+
 }  // namespace
 }  // namespace twinray::testing

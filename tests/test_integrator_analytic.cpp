@@ -151,8 +151,9 @@ TEST(IntegratorAnalytic, DiffusePlaneUnderSquareLightMatchesLambertsPolygonFormu
       double sum = 0.0, sum_sq = 0.0;
       TraceCounters counters;
       for (int i = 0; i < n; ++i) {
-        Rng rng = Rng::keyed(3, 0, static_cast<std::uint64_t>(i));
-        const double v = integrator->radiance(ray, rng, counters, nullptr).x;
+        // Independent samples: the standard error below assumes them.
+        Sampler sampler(SamplerKind::Independent, 3, 0, static_cast<std::uint32_t>(i));
+        const double v = integrator->radiance(ray, sampler, counters, nullptr).x;
         sum += v;
         sum_sq += v * v;
       }

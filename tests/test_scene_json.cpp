@@ -3,6 +3,7 @@
 
 #include "core/scene/json_reader.h"
 #include "core/scene/json_scene.h"
+#include "core/scene/mesh_scene.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/input_error.h"
 #include "scene_test_files.h"
@@ -217,19 +218,40 @@ TEST(BareMeshScene, FramesTheBoundingSphereFromAbove) {
   const std::filesystem::path mesh_file = folder.write("tet.obj", kTetrahedronObj);
   const Scene scene = load_scene(mesh_file);
   EXPECT_TRUE(scene.from_bare_mesh);
-  ASSERT_EQ(scene.materials.size(), 1u);
+  // The mesh-viewer dressing: mid-grey mesh, darker ground plane, sky with a sun (docs/scene-format.md).
+  ASSERT_EQ(scene.materials.size(), 2u);
   EXPECT_EQ(scene.materials[0].type, MaterialType::Diffuse);
-  EXPECT_EQ(scene.materials[0].albedo, glm::vec3(0.8f));
-  ASSERT_EQ(scene.shapes.size(), 1u);
+  EXPECT_EQ(scene.materials[0].albedo, glm::vec3(0.5f));
+  EXPECT_EQ(scene.materials[1].type, MaterialType::Diffuse);
+  ASSERT_EQ(scene.shapes.size(), 2u);
   EXPECT_EQ(scene.shapes[0].file, mesh_file);
-  EXPECT_EQ(scene.environment.type, EnvironmentType::Constant);
-  EXPECT_EQ(scene.environment.radiance, glm::vec3(1));
+  EXPECT_EQ(scene.shapes[0].material, 0u);
+  EXPECT_EQ(scene.shapes[1].material, 1u);
+  EXPECT_EQ(scene.additions.size(), 3u);
+  EXPECT_EQ(scene.environment.type, EnvironmentType::Image);
+  ASSERT_TRUE(scene.environment.pixels);
+  EXPECT_EQ(scene.environment.pixels->width, kSkyWidth);
   EXPECT_EQ(scene.camera.width, 640);
   EXPECT_EQ(scene.camera.height, 480);
   EXPECT_EQ(scene.camera.vfov_deg, 40.0f);
   EXPECT_EQ(scene.render.spp, 16);
   EXPECT_EQ(scene.render.max_depth, -1);
-  EXPECT_EQ(scene.geometry.triangle_count(), 4u);
+  EXPECT_EQ(scene.geometry.triangle_count(), 4u + 2u);
+
+  // The ground plane: two triangles facing +Y, just below the mesh's lowest point (y = 0), wider than it.
+  ASSERT_EQ(scene.geometry.meshes.size(), 2u);
+  const TriangleMesh& ground = scene.geometry.meshes[1];
+  EXPECT_EQ(ground.geom_id, 1u);
+  const Bounds3 gb = ground.bounds();
+  EXPECT_LT(gb.hi.y, 0.0f);
+  EXPECT_GT(gb.hi.y, -1e-3f);
+  EXPECT_EQ(gb.lo.y, gb.hi.y);
+  EXPECT_LT(gb.lo.x, -1.0f);
+  EXPECT_GT(gb.hi.z, 2.0f);
+  for (const glm::uvec3& t : ground.indices) {
+    const glm::vec3 n = glm::cross(ground.positions[t.y] - ground.positions[t.x], ground.positions[t.z] - ground.positions[t.x]);
+    EXPECT_GT(n.y, 0.0f);
+  }
 
   // Bounding box [0,1]^3: centre (0.5,0.5,0.5), bounding-sphere radius sqrt(3)/2; the sphere exactly fills
   // the 40 degree vertical field of view at distance r / sin(20 degrees).
@@ -363,7 +385,9 @@ TEST(SharedMeshes, TriangleCountsMatchTheDataReadme) {
                   {"spot.obj", 5856},            {"teapot.obj", 6320}};
   for (const auto& e : expected) {
     const Scene scene = load_scene(meshes / e.file);
-    EXPECT_EQ(scene.geometry.triangle_count() + scene.report.degenerate_triangles, e.triangles) << e.file;
+    // The mesh alone: the bare-mesh scene adds a two-triangle ground plane (geometry id 1).
+    ASSERT_EQ(scene.geometry.meshes.size(), 2u) << e.file;
+    EXPECT_EQ(scene.geometry.meshes[0].triangle_count() + scene.report.degenerate_triangles, e.triangles) << e.file;
     EXPECT_EQ(scene.report.nonfinite_triangles, 0u) << e.file;
   }
 }

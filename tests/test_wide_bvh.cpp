@@ -115,6 +115,9 @@ TEST(WideBvh, OneTrianglePutsOneLeafUnderTheRoot) {
   ASSERT_EQ(tree.nodes().size(), 1u);
   EXPECT_TRUE(WideRef::is_leaf(tree.nodes()[0].child[0]));
   expect_well_formed(tree, g);
+  // The root's visit plus one block test, each weighted by the root's area over itself.
+  const WideCollapseOptions costs;
+  EXPECT_DOUBLE_EQ(tree.build_stats().sah_cost, double(costs.node_cost) + double(costs.block_cost));
   Ray ray;
   ray.org = {0.25f, 0.25f, 1.0f};
   ray.dir = {0.0f, 0.0f, -1.0f};

@@ -365,10 +365,13 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
   const auto started = Clock::now();
   if (pw::spin_yielding([&] { return c.response.load(std::memory_order_acquire) == sequence; }, kCallerSpin)) return;
   // The per-call limit runs from the moment the worker starts a ray: a batch may take long in all, as long as
-  // every single ray is quick. `current` is the worker's index of the ray in flight.
+  // every single ray is quick. `current` is the worker's index of the ray in flight. Since that index is the
+  // worker's word, the whole request is also bounded by (rays) x (per-call limit), which a worker that keeps
+  // changing the index cannot extend.
   auto progress_at = started;
   std::uint32_t progress = c.current.load(std::memory_order_relaxed);
   const auto per_call_ticks = std::chrono::duration_cast<Clock::duration>(per_call);
+  const auto request_limit = started + per_call_ticks * std::max<std::uint32_t>(1, lease.slot().context.count);
   for (;;) {
     const std::uint32_t seen = c.response.load(std::memory_order_seq_cst);
     if (seen == sequence) return;
@@ -379,7 +382,7 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
       progress = at;
       progress_at = now;
     }
-    auto limit = progress_at + per_call_ticks;
+    auto limit = std::min(progress_at + per_call_ticks, request_limit);
     const bool deadline_first = limits_.deadline && *limits_.deadline < limit;
     if (deadline_first) limit = *limits_.deadline;
     if (now >= limit) fail_timeout(lease, lease.slot().context.stage, deadline_first, per_call);

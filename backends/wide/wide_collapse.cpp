@@ -59,7 +59,10 @@ class Collapser {
       emit(0, 0, 1);
     }
     const float root_area = sub_[0].area;
-    tree.sah_cost = root_area > 0.0f ? (o_.node_cost * root_area + split_cost(0, kW)) / root_area : 0.0;
+    // A one-leaf tree has no binary children to split between (split_cost would read past the plan): its
+    // root's one slot costs the leaf itself.
+    const float below_root = bin_.nodes[0].is_leaf() ? plan_[0].cost[1] : split_cost(0, kW);
+    tree.sah_cost = root_area > 0.0f ? (o_.node_cost * root_area + below_root) / root_area : 0.0;
     return tree;
   }
 

@@ -76,10 +76,22 @@ float LightSampler::selection_probability(std::size_t light_index) const {
   return selection_ ? selection_->pmf(light_index) : 0.0f;
 }
 
+std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, glm::vec2 u) const {
+  if (!selection_) return std::nullopt;
+  float rest = 0.0f;
+  float pmf = 0.0f;
+  const std::size_t i = selection_->sample_discrete(u.x, &pmf, &rest);
+  return sample_light(i, pmf, ref, glm::vec2(rest, u.y));
+}
+
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_select, glm::vec2 u) const {
   if (!selection_) return std::nullopt;
   float pmf = 0.0f;
   const std::size_t i = selection_->sample_discrete(u_select, &pmf);
+  return sample_light(i, pmf, ref, u);
+}
+
+std::optional<LightSample> LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u) const {
   if (!(pmf > 0.0f)) return std::nullopt;
   LightSample s;
   if (i < triangles_.size()) {

@@ -77,6 +77,11 @@ class LightSampler {
 
   // A light sample for receiving point `ref`. u_select picks the light, u the point on it.
   std::optional<LightSample> sample(const glm::vec3& ref, float u_select, glm::vec2 u) const;
+  // The same from one 2D value: u.x picks the light and, rescaled to [0, 1) within the chosen light's share
+  // of [0, 1), becomes the first coordinate of the point on it. Stratified values then stay stratified over
+  // the union of the lights (a quad lamp made of two triangles is sampled like one square) instead of each
+  // light receiving a random subset of them; what the integrators use with the Sobol sampler.
+  std::optional<LightSample> sample(const glm::vec3& ref, glm::vec2 u) const;
 
   // Density with which sample(ref, ...) would produce the direction toward `point` on surface light hit
   // `hit` (geometry and primitive ids); 0 when that primitive is not a sampled light.
@@ -92,6 +97,7 @@ class LightSampler {
  private:
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+  std::optional<LightSample> sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u) const;
   LightSample sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u) const;
   LightSample sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u) const;
   static float sphere_pdf(const EmissiveSphere& sph, const glm::vec3& ref, const glm::vec3& point,

@@ -64,7 +64,7 @@ std::unique_ptr<EnvironmentLight> EnvironmentLight::create(const Environment& en
     return light;  // no texels, no tables
   }
 
-  const Image image = read_image(file);  // throws InputError naming the file
+  const Image image = env.pixels ? *env.pixels : read_image(file);  // throws InputError naming the file
   const int w = image.width, h = image.height;
   light->width_ = w;
   light->height_ = h;

@@ -5,7 +5,9 @@
 //  - `wo` points away from the surface toward where the light goes (the previous path vertex),
 //    `wi` points away from the surface toward where the light comes from.
 //  - Only geometric normals exist. `ng` is the unit geometric normal as the backend reports it (never
-//    flipped). Opaque models (diffuse, mirror) are two-sided: they use the side of `ng` that `wo` is on.
+//    flipped). Opaque models (diffuse, mirror) are two-sided by default: they use the side of `ng` that `wo`
+//    is on. A one-sided one (Material::two_sided = false, Mitsuba's BSDFs without `twosided`) scatters
+//    only on the front (wo on the positive side of ng) and is black seen from the back.
 //    Glass uses `ng` to tell outside (the positive side) from inside.
 //  - eval() returns f(wo, wi) |cos(ng, wi)|, the quantity the estimators multiply by radiance.
 //  - Delta models (mirror, glass) have eval() = pdf() = 0: they can only be sampled.
@@ -51,26 +53,28 @@ class Bsdf {
     }
     if (b.kind_ == Kind::Lambertian && b.tint_.x <= 0.0f && b.tint_.y <= 0.0f && b.tint_.z <= 0.0f)
       b.kind_ = Kind::Black;
+    b.one_sided_ = !m.two_sided && (b.kind_ == Kind::Lambertian || b.kind_ == Kind::Mirror);
     return b;
   }
 
   Kind kind() const { return kind_; }
   bool is_delta() const { return kind_ == Kind::Mirror || kind_ == Kind::Dielectric; }
   bool is_black() const { return kind_ == Kind::Black; }
+  bool is_one_sided() const { return one_sided_; }
   // Hemispherical reflectance seen by the albedo AOV (glass reports 1).
   glm::vec3 albedo() const { return kind_ == Kind::Black ? glm::vec3(0.0f) : tint_; }
 
   glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi, const glm::vec3& ng) const {
     if (kind_ != Kind::Lambertian) return glm::vec3(0.0f);
     const float cos_o = glm::dot(wo, ng), cos_i = glm::dot(wi, ng);
-    if (!same_side(cos_o, cos_i)) return glm::vec3(0.0f);
+    if (!same_side(cos_o, cos_i) || (one_sided_ && !(cos_o > 0.0f))) return glm::vec3(0.0f);
     return tint_ * (std::abs(cos_i) * std::numbers::inv_pi_v<float>);
   }
 
   float pdf(const glm::vec3& wo, const glm::vec3& wi, const glm::vec3& ng) const {
     if (kind_ != Kind::Lambertian) return 0.0f;
     const float cos_o = glm::dot(wo, ng), cos_i = glm::dot(wi, ng);
-    if (!same_side(cos_o, cos_i)) return 0.0f;
+    if (!same_side(cos_o, cos_i) || (one_sided_ && !(cos_o > 0.0f))) return 0.0f;
     return std::abs(cos_i) * std::numbers::inv_pi_v<float>;
   }
 
@@ -78,6 +82,7 @@ class Bsdf {
   std::optional<BsdfSample> sample(const glm::vec3& wo, const glm::vec3& ng, float u_lobe, glm::vec2 u) const {
     const float cos_o = glm::dot(wo, ng);
     if (cos_o == 0.0f) return std::nullopt;  // grazing: no side to scatter into
+    if (one_sided_ && cos_o < 0.0f) return std::nullopt;  // the black back of a one-sided surface
     switch (kind_) {
       case Kind::Lambertian: {
         const glm::vec3 n = cos_o > 0.0f ? ng : -ng;
@@ -137,6 +142,7 @@ class Bsdf {
   }
 
   Kind kind_ = Kind::Black;
+  bool one_sided_ = false;
   glm::vec3 tint_{0.0f};
   float ior_ = 1.0f;
 };

@@ -9,7 +9,7 @@
 
 namespace twinray {
 
-glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCounters& counters,
+glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters,
                                      FirstHitInfo* first) const {
   const SamplingStrategy strategy = settings_.strategy;
   glm::vec3 result(0.0f);
@@ -37,14 +37,14 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCount
     if (sp.bsdf->is_black()) break;
 
     if (!sp.bsdf->is_delta()) {
-      result += throughput * sample_direct_light(ctx_, sp, strategy, rng, counters);
+      result += throughput * sample_direct_light(ctx_, sp, strategy, sampler, counters);
       lit_vertex_done = true;
       // With light sampling only, the BSDF continuation could only find emission that light sampling
       // cannot produce, and every emitter here can be sampled: skip it.
       if (strategy == SamplingStrategy::Light && ctx_.lights != nullptr) break;
     }
-    const float u_lobe = rng.next_float();
-    const glm::vec2 u(rng.next_float(), rng.next_float());
+    const float u_lobe = sampler.next_1d();
+    const glm::vec2 u = sampler.next_2d();
     const std::optional<BsdfSample> bs = sp.bsdf->sample(sp.wo, sp.ng, u_lobe, u);
     if (!bs || max_component(bs->weight) <= 0.0f) break;
     throughput *= bs->weight;
@@ -56,7 +56,7 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Rng& rng, TraceCount
 
     // Delta chains can be endless (total internal reflection inside a glass box): the same Russian
     // roulette as the path integrator ends them without bias.
-    if (!survive_roulette(depth, settings_.rr_depth, eta_scale, throughput, rng)) break;
+    if (!survive_roulette(depth, settings_.rr_depth, eta_scale, throughput, sampler)) break;
   }
   return result;
 }

@@ -13,7 +13,7 @@ class DirectIntegrator final : public Integrator {
  public:
   DirectIntegrator(const SceneContext& ctx, const IntegratorSettings& settings) : ctx_(ctx), settings_(settings) {}
   IntegratorKind kind() const override { return IntegratorKind::Direct; }
-  glm::vec3 radiance(const Ray& camera_ray, Rng& rng, TraceCounters& counters, FirstHitInfo* first) const override;
+  glm::vec3 radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters, FirstHitInfo* first) const override;
 
  private:
   const SceneContext& ctx_;

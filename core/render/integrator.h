@@ -13,7 +13,7 @@
 #include "core/lights/area_lights.h"
 #include "core/lights/environment_light.h"
 #include "core/materials/bsdf.h"
-#include "core/sampling/rng.h"
+#include "core/sampling/sampler.h"
 #include "core/scene/scene.h"
 
 #include <glm/vec3.hpp>
@@ -82,7 +82,7 @@ class Integrator {
   virtual ~Integrator() = default;
   virtual IntegratorKind kind() const = 0;
   // Radiance arriving along `camera_ray` (unit direction). `first`, when not null, receives the first hit.
-  virtual glm::vec3 radiance(const Ray& camera_ray, Rng& rng, TraceCounters& counters,
+  virtual glm::vec3 radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters,
                              FirstHitInfo* first) const = 0;
 };
 

@@ -85,11 +85,9 @@ float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf
 }
 
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
-                              Rng& rng, TraceCounters& counters) {
+                              Sampler& sampler, TraceCounters& counters) {
   if (ctx.lights == nullptr || strategy == SamplingStrategy::Bsdf) return glm::vec3(0.0f);
-  const float u_select = rng.next_float();
-  const glm::vec2 u(rng.next_float(), rng.next_float());
-  const std::optional<LightSample> ls = ctx.lights->sample(sp.p, u_select, u);
+  const std::optional<LightSample> ls = ctx.lights->sample(sp.p, sampler.next_2d());
   if (!ls || max_component(ls->radiance) <= 0.0f) return glm::vec3(0.0f);
   const glm::vec3 f = sp.bsdf->eval(sp.wo, ls->wi, sp.ng);
   if (max_component(f) <= 0.0f) return glm::vec3(0.0f);

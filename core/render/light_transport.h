@@ -49,7 +49,7 @@ float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf
 // One light sample at a non-delta surface point: BSDF * radiance / pdf, MIS weighted against BSDF
 // sampling for the Mis strategy. Traces one shadow ray when the sample can contribute.
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
-                              Rng& rng, TraceCounters& counters);
+                              Sampler& sampler, TraceCounters& counters);
 
 // Radiance arriving from outside the scene along unit direction dir, weighted for MIS.
 glm::vec3 escaped_radiance(const SceneContext& ctx, const glm::vec3& dir, SamplingStrategy strategy,

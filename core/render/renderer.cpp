@@ -115,7 +115,8 @@ struct TileTally {
 };
 
 void render_tile(const Tile& tile, int sample_begin, int sample_end, const PinholeCamera& camera,
-                 const Integrator& integrator, std::uint64_t seed, Film& film, TileTally& tally) {
+                 const Integrator& integrator, SamplerKind sampler_kind, std::uint64_t seed, Film& film,
+                 TileTally& tally) {
   const bool want_first = film.aux().normals || film.aux().albedo || film.aux().depth;
   const auto width = static_cast<std::uint64_t>(film.width());
   for (int y = tile.y0; y < tile.y1; ++y) {
@@ -124,14 +125,14 @@ void render_tile(const Tile& tile, int sample_begin, int sample_end, const Pinho
       const auto idx = static_cast<std::size_t>(pixel_index);
       Film::PixelSums& px = film.pixel(idx);
       for (int s = sample_begin; s < sample_end; ++s) {
-        Rng rng = Rng::keyed(seed, pixel_index, static_cast<std::uint64_t>(s));
-        const float jx = rng.next_float(), jy = rng.next_float();
-        const Ray ray = camera.generate_ray((static_cast<float>(x) + jx) / static_cast<float>(camera.width()),
-                                            1.0f - (static_cast<float>(y) + jy) / static_cast<float>(camera.height()));
+        Sampler sampler(sampler_kind, seed, pixel_index, static_cast<std::uint32_t>(s));
+        const glm::vec2 jitter = sampler.next_2d();
+        const Ray ray = camera.generate_ray((static_cast<float>(x) + jitter.x) / static_cast<float>(camera.width()),
+                                            1.0f - (static_cast<float>(y) + jitter.y) / static_cast<float>(camera.height()));
         const QueryStats before = tally.counters.query;
         const std::uint64_t rays_before = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
         FirstHitInfo first;
-        glm::vec3 L = integrator.radiance(ray, rng, tally.counters, want_first ? &first : nullptr);
+        glm::vec3 L = integrator.radiance(ray, sampler, tally.counters, want_first ? &first : nullptr);
         if (!finite3(L)) {
           L = glm::vec3(0.0f);
           ++tally.nonfinite;
@@ -184,7 +185,7 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
       for (std::size_t t = r.begin(); t != r.end(); ++t) {
         TileTally tally;
         tally.counters.collect_query_stats = aux.cost;
-        render_tile(tiles[t], sample_begin, sample_end, camera, *integrator, opt.seed, result.film, tally);
+        render_tile(tiles[t], sample_begin, sample_end, camera, *integrator, opt.sampler, opt.seed, result.film, tally);
         {
           std::lock_guard lock(merge_mutex);
           stats.samples += tally.samples;

@@ -41,8 +41,9 @@ inline float roulette_survival(int depth, int rr_depth, const glm::vec3& through
 }
 
 // Plays the roulette: false when the path ends; otherwise the throughput is reweighted by 1/q.
-// Draws a random number only when q < 1.
-inline bool survive_roulette(int depth, int rr_depth, float eta_scale, glm::vec3& throughput, Rng& rng) {
+// Draws a random number only when q < 1. `Generator` is a Sampler or an Rng (anything with next_float()).
+template <class Generator>
+inline bool survive_roulette(int depth, int rr_depth, float eta_scale, glm::vec3& throughput, Generator& rng) {
   const float q = roulette_survival(depth, rr_depth, throughput, eta_scale);
   if (q >= 1.0f) return true;
   if (!(rng.next_float() < q)) return false;  // also ends a path with q NaN or 0

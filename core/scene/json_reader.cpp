@@ -238,6 +238,11 @@ std::string JsonNode::as_string() const {
   return value_->get<std::string>();
 }
 
+bool JsonNode::as_bool() const {
+  if (!value_->is_boolean()) fail("expected true or false, found " + describe_type(*value_));
+  return value_->get<bool>();
+}
+
 double JsonNode::as_double() const {
   if (!value_->is_number()) fail("expected a number, found " + describe_type(*value_));
   const double v = value_->get<double>();

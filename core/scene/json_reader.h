@@ -47,6 +47,7 @@ class JsonNode {
 
   // ---- scalars
   std::string as_string() const;
+  bool as_bool() const;
   double as_double() const;  // any finite number
   float as_float() const;    // a finite number that is also finite as a float
   std::int64_t as_integer(std::int64_t lo, std::int64_t hi) const;  // an integer in [lo, hi]

@@ -89,11 +89,11 @@ class SceneParser {
       const JsonNode type = m.member("type");
       const std::string type_name = type.as_string();
       if (type_name == "diffuse") {
-        m.expect_object({"type", "albedo"});
+        m.expect_object({"type", "albedo", "two_sided"});
         material.type = MaterialType::Diffuse;
         material.albedo = reflectance_color(m.member("albedo"));
       } else if (type_name == "mirror") {
-        m.expect_object({"type", "reflectance"});
+        m.expect_object({"type", "reflectance", "two_sided"});
         material.type = MaterialType::Mirror;
         if (const auto r = m.optional_member("reflectance")) material.reflectance = reflectance_color(*r);
       } else if (type_name == "glass") {
@@ -104,13 +104,14 @@ class SceneParser {
           if (!(material.ior > 0.0f)) ior->fail("ior must be positive, got " + ior->json().dump());
         }
       } else if (type_name == "emissive") {
-        m.expect_object({"type", "radiance", "albedo"});
+        m.expect_object({"type", "radiance", "albedo", "two_sided"});
         material.type = MaterialType::Emissive;
         material.radiance = m.member("radiance").as_color();
         if (const auto albedo = m.optional_member("albedo")) material.albedo = reflectance_color(*albedo);
       } else {
         type.fail("unknown material type '" + type_name + "' (expected diffuse, mirror, glass or emissive)");
       }
+      if (const auto sided = m.optional_member("two_sided")) material.two_sided = sided->as_bool();
       material_index_.emplace(name, static_cast<std::uint32_t>(scene_.materials.size()));
       scene_.materials.push_back(std::move(material));
     }
@@ -303,13 +304,15 @@ class SceneParser {
   }
 
   void parse_render(const JsonNode& node) {
-    node.expect_object({"spp", "max_depth", "seed"});
+    node.expect_object({"spp", "max_depth", "rr_depth", "seed"});
     RenderSettings& r = scene_.render;
     if (const auto spp = node.optional_member("spp")) r.spp = static_cast<int>(spp->as_integer(1, kMaxSpp));
     if (const auto depth = node.optional_member("max_depth")) {
       r.max_depth = static_cast<int>(depth->as_integer(-1, std::numeric_limits<int>::max()));
       if (r.max_depth == 0) depth->fail("max_depth must be -1 (unlimited) or at least 1, got 0");
     }
+    if (const auto rr = node.optional_member("rr_depth"))
+      r.rr_depth = static_cast<int>(rr->as_integer(1, std::numeric_limits<int>::max()));
     if (const auto seed = node.optional_member("seed")) r.seed = seed->as_unsigned();
   }
 

@@ -3,11 +3,13 @@
 // settings. Produced by load_scene() (core/scene/scene_loader.h) from a JSON scene or a bare OBJ/PLY mesh.
 
 #include "core/geometry/scene_geometry.h"
+#include "core/image/image.h"
 
 #include <glm/vec3.hpp>
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,10 @@ struct Material {
   glm::vec3 reflectance{1.0f};  // Mirror
   float ior = 1.5f;             // Glass: interior index of refraction, exterior is 1
   glm::vec3 radiance{0.0f};     // Emissive: one-sided, on the front (geometric normal) side
+  // Diffuse, Mirror, and an Emissive's albedo: false makes the surface black seen from its back (the side
+  // its geometric normal points away from), like Mitsuba 3's BSDFs without `twosided`. Glass has two sides
+  // by nature and ignores it.
+  bool two_sided = true;
 };
 
 enum class ShapeKind { Mesh, Sphere };
@@ -51,11 +57,15 @@ struct Environment {
   std::filesystem::path image;    // Image: latitude-longitude .hdr/.exr, top row = +Y (zenith)
   float rotation_deg = 0.0f;      // Image: rotation about +Y
   float scale = 1.0f;             // Image: radiance multiplier
+  // Image: the texels in memory (a procedural map, such as the sky of a bare mesh); when set, `image` is
+  // only the map's name and no file is read.
+  std::shared_ptr<const Image> pixels;
 };
 
 struct RenderSettings {
   int spp = 16;
   int max_depth = -1;  // Mitsuba 3 convention: 1 = emitters only, 2 = direct only, -1 = unlimited
+  int rr_depth = 5;    // Russian roulette from this many segments on (Mitsuba's rr_depth)
   std::uint64_t seed = 0;
 };
 
@@ -69,6 +79,7 @@ struct LoadReport {
 struct Scene {
   std::filesystem::path source;  // the scene or mesh file it was loaded from
   bool from_bare_mesh = false;   // true when a bare OBJ/PLY was wrapped in a default scene
+  std::vector<std::string> additions;  // what the default scene added around a bare mesh (twinray info)
   CameraDesc camera;
   std::vector<Material> materials;
   std::vector<ShapeInfo> shapes;  // indexed by geometry id

@@ -28,7 +28,8 @@ std::vector<Feature> scene_features(const Scene& scene) {
       f.push_back({"environment sampling tables", false, "constant environment: uniform sphere sampling is exact"});
       break;
     case EnvironmentType::Image:
-      f.push_back({"environment light", true, fmt::format("image {}", scene.environment.image.string())});
+      f.push_back({"environment light", true,
+                   fmt::format("image {}{}", scene.environment.image.string(), scene.environment.pixels ? " (procedural)" : "")});
       f.push_back({"environment sampling tables", true, "piecewise-constant 2D distribution over the texels"});
       break;
   }

@@ -27,7 +27,7 @@ struct ReferenceSettings {
 };
 
 // Bump when a renderer change alters reference images for the same scene and settings.
-inline constexpr const char* kReferenceVersion = "twinray-reference-1";
+inline constexpr const char* kReferenceVersion = "twinray-reference-2";  // 2: the Sobol sampler
 
 std::uint64_t reference_key(const Scene& scene, const ReferenceSettings& settings);
 std::string key_hex(std::uint64_t key);

@@ -316,8 +316,8 @@ std::optional<std::filesystem::path> bundled_suites_dir() {
     candidates.push_back(dir / "share" / "twinray" / "suites");
     if (dir == dir.parent_path()) break;
   }
-#ifdef TWINRAY_SOURCE_SUITES_DIR
-  candidates.emplace_back(TWINRAY_SOURCE_SUITES_DIR);
+#ifdef TWINRAY_SOURCE_DIR
+  candidates.push_back(std::filesystem::path(TWINRAY_SOURCE_DIR) / "suites");
 #endif
   for (const std::filesystem::path& c : candidates)
     if (is_suites_dir(c)) return std::filesystem::weakly_canonical(c);
