@@ -41,6 +41,7 @@ Scorecard sample_scorecard() {
     if (c.failed()) c.reproduce = "twinray trace x --ray '0x1p+0 0 0 1 0 0 0 inf'";
     c.seconds = 0.5 * i;
     c.figures = {{"rays", 100 * i}};
+    if (c.outcome == Outcome::Crash) c.figures["plugin_output"] = "printf debugging\x07 <before> the crash\xff\n";
     card.checks.push_back(c);
   }
   card.performance["perf"] = {{"rays_per_second", {{"plugin", 1.0e6}}}};
@@ -86,6 +87,8 @@ TEST(GradeReports, GradescopeFileValidatesAgainstGradescopesFormat) {
   EXPECT_FALSE(j.at("tests")[4].contains("status"));  // skipped: Gradescope derives it from the score
   EXPECT_EQ(j.at("tests")[4].at("visibility"), "hidden");
   EXPECT_NE(j.at("tests")[1].at("output").get<std::string>().find("twinray trace"), std::string::npos);
+  EXPECT_NE(j.at("tests")[2].at("output").get<std::string>().find("What the plugin printed:\nprintf debugging"),
+            std::string::npos);
   EXPECT_EQ(j.at("execution_time"), 13);  // whole seconds, rounded up
 }
 
@@ -108,6 +111,7 @@ TEST(GradeReports, JunitFileValidatesAgainstTheJunitSchema) {
   EXPECT_NE(xml.find("<error message="), std::string::npos);
   EXPECT_NE(xml.find("type=\"timeout\""), std::string::npos);
   EXPECT_NE(xml.find("<skipped message="), std::string::npos);
+  EXPECT_NE(xml.find("<system-err>printf debugging"), std::string::npos) << xml;
   EXPECT_EQ(xml.find('\x01'), std::string::npos);  // control characters XML 1.0 forbids are gone
   // And the schema has teeth: a testcase without a name is refused.
   std::string broken = xml;

@@ -38,6 +38,38 @@ void prepare_references(CheckContext& ctx) {
   if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality) ctx.scene.reference("bvh");
 }
 
+// Runs one check in a fresh plugin worker and fills its outcome, detail, reproduce line, figures and image.
+void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckResult& r,
+             std::vector<PendingImage>& images) {
+  // The references are built before the check's clock starts: its time limit is the plugin's.
+  prepare_references(ctx);
+  ctx.deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                       std::chrono::duration<double>(ctx.spec.time_limit_seconds));
+  try {
+    CheckVerdict v = run_check(ctx);
+    r.outcome = v.passed ? Outcome::Pass : Outcome::Fail;
+    if (!v.scored) r.max_points = 0.0;
+    r.detail = std::move(v.detail);
+    r.reproduce = v.passed ? "" : std::move(v.reproduce);
+    if (v.image) {
+      const std::filesystem::path png = image_dir / (ctx.spec.name + ".png");
+      r.image = png.string();
+      images.push_back({png, std::move(*v.image)});
+    }
+    r.figures = std::move(v.figures);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::logic_error&) {
+    throw;  // a bad --check name or a grader bug is never the plugin's fault
+  } catch (...) {
+    const FailureReport f = classify_failure(std::current_exception());
+    r.outcome = f.outcome;
+    r.detail = f.detail;
+    r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    if (!f.output.empty()) r.figures["plugin_output"] = f.output;
+  }
+}
+
 std::vector<const CheckSpec*> selected_checks(const Suite& suite, const std::vector<std::string>& only) {
   std::vector<const CheckSpec*> checks;
   if (only.empty()) {
@@ -115,35 +147,7 @@ Scorecard run_grade(const GradeSettings& settings) {
       std::unique_ptr<GradeScene>& scene = scenes[spec.scene];
       if (!scene) scene = std::make_unique<GradeScene>(scene_spec, suite);
       CheckContext ctx{spec, *scene, env, {}};
-      // The references are built before the check's clock starts: its time limit is the plugin's.
-      prepare_references(ctx);
-      ctx.deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                           std::chrono::duration<double>(spec.time_limit_seconds));
-      try {
-        CheckVerdict v = run_check(ctx);
-        r.outcome = v.passed ? Outcome::Pass : Outcome::Fail;
-        if (!v.scored) r.max_points = 0.0;
-        r.detail = std::move(v.detail);
-        r.reproduce = v.passed ? "" : std::move(v.reproduce);
-        if (v.image) {
-          const std::filesystem::path png = settings.image_dir / (spec.name + ".png");
-          r.image = png.string();
-          card.images.push_back({png, std::move(*v.image)});
-        }
-        r.figures = std::move(v.figures);
-      } catch (const InputError&) {
-        throw;
-      } catch (const std::invalid_argument&) {
-        throw;
-      } catch (const std::logic_error&) {
-        throw;  // a grader bug is never the plugin's fault
-      } catch (...) {
-        const FailureReport f = classify_failure(std::current_exception());
-        r.outcome = f.outcome;
-        r.detail = f.detail;
-        r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
-        if (!f.output.empty()) r.figures["plugin_output"] = f.output;
-      }
+      execute(ctx, settings.image_dir, r, card.images);
       if (!r.required && r.failed() && spec.requirement == Requirement::IfClaimed)
         r.detail += " (not claimed by the plugin: reported, not required)";
     }

@@ -15,6 +15,8 @@ nlohmann::json gradescope_json(const Scorecard& card) {
   for (const CheckResult& c : card.checks) {
     std::string output = fmt::format("{}: {}", to_string(c.outcome), c.detail);
     if (!c.reproduce.empty()) output += "\n\nReproduce it with:\n" + c.reproduce;
+    if (c.figures.contains("plugin_output"))
+      output += "\n\nWhat the plugin printed:\n" + c.figures["plugin_output"].get<std::string>();
     if (!c.description.empty()) output = c.description + "\n\n" + output;
     nlohmann::json t = {{"name", fmt::format("{} ({})", c.name, to_string(c.category))},
                         {"score", c.points},

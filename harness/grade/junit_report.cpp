@@ -61,6 +61,8 @@ std::string junit_xml(const Scorecard& card) {
                                   format_points(c.max_points), to_string(c.category), c.detail);
     if (!c.reproduce.empty()) out += "reproduce: " + c.reproduce + "\n";
     x += "      <system-out>" + xml_escape(out) + "</system-out>\n";
+    if (c.figures.contains("plugin_output"))
+      x += "      <system-err>" + xml_escape(c.figures["plugin_output"].get<std::string>()) + "</system-err>\n";
     x += "    </testcase>\n";
   }
   x += "  </testsuite>\n</testsuites>\n";

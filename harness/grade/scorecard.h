@@ -28,7 +28,9 @@ struct CheckResult {
   std::string reproduce;    // one command line that replays the failure (empty when the check passed)
   std::string image;        // path of the disagreement PNG (written with the other outputs), or empty
   double seconds = 0.0;
-  nlohmann::json figures = nlohmann::json::object();  // the numbers behind the verdict
+  // The numbers behind the verdict; for a crash, timeout or contract violation also "plugin_output", what
+  // the plugin printed (captured by its worker, truncated).
+  nlohmann::json figures = nlohmann::json::object();
 
   bool failed() const { return outcome == Outcome::Fail || outcome == Outcome::Crash || outcome == Outcome::Timeout; }
   bool fails_run() const { return required && failed(); }
