@@ -13,6 +13,13 @@
 // headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
 // child-pair box test of ray_box.h) defined. See bvh_kernels.h.
 
+// Told about every node a query enters, in order, with the end of the interval still searched (the closest
+// hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
+// compiles away, so the production traversal carries no trace of it.
+struct NoVisitObserver {
+  void enter(std::uint32_t /*node*/, float /*tmax*/) const {}
+};
+
 namespace bvh_detail {
 
 struct StackEntry {
@@ -61,8 +68,12 @@ TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t
 }  // namespace bvh_detail
 
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+// Always inlined into its one caller per instantiation (the kernel below, or a traced query), so that the
+// kernels compile to the code they had before observers existed.
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed(const BvhView& bvh, const Ray& ray,
+                                                                                Hit& hit, QueryStats* stats,
+                                                                                const Observer& observer) {
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
@@ -82,6 +93,7 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
   const float box_tmin = cull_min(ray.tmin);
   bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, cull_max(tmax), root_entry);
   while (more) {
+    observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
@@ -144,8 +156,10 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(const BvhView& bvh, const Ray& ray,
+                                                                               QueryStats* stats,
+                                                                               const Observer& observer) {
   using namespace bvh_detail;
   if (bvh.nodes.empty()) return false;
   const BoxRay box_ray(ray);
@@ -162,6 +176,7 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
   bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   while (more && !found) {
+    observer.enter(index, ray.tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
@@ -194,4 +209,15 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
     stats->primitives_tested += prims_tested;
   }
   return found;
+}
+
+// The kernels (BvhKernels): the traversals above without an observer.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  return bvh_intersect_observed<kTriangles, kSpheres>(bvh, ray, hit, stats, NoVisitObserver{});
+}
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
 }
