@@ -1,8 +1,11 @@
 #include "harness/grade/answers.h"
 
 #include "core/geometry/ray_text.h"
+#include "harness/arbiter/arbiter.h"
 
 #include <fmt/core.h>
+
+#include <utility>
 
 namespace twinray::grade {
 
@@ -32,13 +35,14 @@ class Judge {
  public:
   Judge(GradeScene& scene, std::span<const Ray> rays, const Answers& plugin, const Answers& reference,
         const JudgeOptions& options)
-      : scene_(scene), rays_(rays), plugin_(plugin), reference_(reference), o_(options),
-        second_name_(options.reference == "brute" ? "embree" : "brute") {}
+      : scene_(scene), rays_(rays), plugin_(plugin), reference_(reference), o_(options) {
+    // What the arbiter holds the plugin to (see answers.h): its watertightness claim, never the tie rule.
+    claims_.watertight = options.watertight;
+  }
 
   Judgement run() {
     Judgement j;
     j.rays = rays_.size();
-    j.second_opinion = second_name_;
     for (std::size_t i = 0; i < rays_.size(); ++i) {
       const bool check_closest = o_.queries != Queries::Any, check_any = o_.queries != Queries::Closest;
       const Hit& ph = check_closest ? plugin_.hits[i] : kMiss;
@@ -47,53 +51,66 @@ class Judge {
       const crosscheck::RayComparison c = crosscheck::compare_ray(scene_.index(), rays_[i], ph, rh, po, ro);
 
       if (check_closest && !c.identical) {
+        pending_ruling_.clear();
         bool wrong = false;
-        switch (c.kind) {
-          case crosscheck::MismatchClass::Edge: ++j.edge; break;
-          case crosscheck::MismatchClass::Tie:
-            if (o_.tie_rule && same_primitive_geometry(ph, rh)) {
-              // Copies of one primitive: every copy is hit at the same t, so the lowest id must win. brute
-              // honours the rule and names the lowest copy.
-              wrong = breaks_tie_rule(i, ph, o_.reference == "brute" ? &rh : nullptr);
-            } else {
-              ++j.tie;
-            }
-            break;
-          case crosscheck::MismatchClass::Genuine: wrong = !arbitrate(i, ph, po, /*any=*/false, j); break;
+        if (c.kind == crosscheck::MismatchClass::Tie && o_.tie_rule && same_primitive_geometry(ph, rh)) {
+          // Copies of one primitive: every copy is hit at the same t, so the lowest id must win. brute
+          // honours the rule and names the lowest copy.
+          wrong = breaks_tie_rule(i, ph, o_.reference == "brute" ? &rh : nullptr);
+          if (!wrong) ++j.tie;
+        } else {
+          wrong = !arbitrate(c.kind, j, [&](const arbiter::Arbiter& a) {
+            const arbiter::Ruling plugin_ruling = a.rule_closest(rays_[i], ph, claims_);
+            return std::pair{plugin_ruling, a.rule_closest(rays_[i], rh, claims_).right};
+          });
         }
         if (wrong) record(j, i, false);
       }
-      if (check_any) {
-        if (c.occlusion == crosscheck::OcclusionClass::Edge) ++j.edge;
-        if (c.occlusion == crosscheck::OcclusionClass::Genuine && !arbitrate(i, ph, po, /*any=*/true, j)) record(j, i, true);
+      if (check_any && po != ro) {
+        pending_ruling_.clear();
+        const crosscheck::MismatchClass kind = c.occlusion == crosscheck::OcclusionClass::Genuine
+                                                   ? crosscheck::MismatchClass::Genuine
+                                                   : crosscheck::MismatchClass::Edge;
+        const bool wrong = !arbitrate(kind, j, [&](const arbiter::Arbiter& a) {
+          const arbiter::Ruling plugin_ruling = a.rule_occluded(rays_[i], po, claims_);
+          return std::pair{plugin_ruling, a.rule_occluded(rays_[i], ro, claims_).right};
+        });
+        if (wrong) record(j, i, true);
       }
     }
     return j;
   }
 
  private:
-  // True when the second opinion sides with the plugin (the reference erred).
-  bool arbitrate(std::size_t i, const Hit& ph, bool po, bool any, Judgement& j) {
+  // Whether the plugin's answer to a disagreement is right, by the arbiter. `rule` returns the plugin's
+  // ruling and whether the reference's answer was right. Beyond the cap, the classification decides:
+  // a genuine disagreement is wrong, an edge or tie is not.
+  template <typename Rule>
+  bool arbitrate(crosscheck::MismatchClass kind, Judgement& j, Rule&& rule) {
     if (arbitrations_ >= o_.max_arbitrations) {
-      ++j.unarbitrated;
-      return false;
+      if (kind == crosscheck::MismatchClass::Genuine) {
+        ++j.unarbitrated;
+        return false;
+      }
+      ++(kind == crosscheck::MismatchClass::Tie ? j.tie : j.edge);
+      return true;
     }
     ++arbitrations_;
-    const bool right = agrees_with(second_name_, i, ph, po, any);
-    if (right) ++j.overruled;
-    return right;
+    ++j.ruled;
+    const auto [ruling, reference_right] = rule(scene_.arbiter());
+    if (!ruling.right) {
+      pending_ruling_ = ruling_text(ruling);
+      return false;
+    }
+    if (!reference_right) ++j.overruled;
+    else if (ruling.reason == arbiter::Reason::Tie) ++j.tie;
+    else if (ruling.reason != arbiter::Reason::Agrees) ++j.edge;
+    return true;
   }
 
-  bool agrees_with(const std::string& backend, std::size_t i, const Hit& ph, bool po, bool any) {
-    const Backend& second = scene_.reference(backend);
-    Hit sh;
-    if (!any) second.intersect(rays_[i], sh);
-    const bool so = any && second.occluded(rays_[i]);
-    const crosscheck::RayComparison c = crosscheck::compare_ray(scene_.index(), rays_[i], ph, any ? kMiss : sh, po, so);
-    if (any) return c.occlusion != crosscheck::OcclusionClass::Genuine;
-    if (c.identical || c.kind == crosscheck::MismatchClass::Edge) return true;
-    if (c.kind != crosscheck::MismatchClass::Tie) return false;
-    return !(o_.tie_rule && same_primitive_geometry(ph, sh) && breaks_tie_rule(i, ph, backend == "brute" ? &sh : nullptr));
+  static std::string ruling_text(const arbiter::Ruling& r) {
+    return fmt::format("; exact arithmetic: {} ({}{})", describe_hit(r.exact), arbiter::to_string(r.reason),
+                       r.detail.empty() ? "" : ": " + r.detail);
   }
 
   // Whether the plugin's hit `ph` on a duplicated primitive is not the lowest-id copy, which brute names
@@ -125,6 +142,7 @@ class Judge {
   void record(Judgement& j, std::size_t i, bool any) {
     (any ? j.wrong_any : j.wrong_closest) += 1;
     j.wrong.push_back({i, any});
+    const std::string ruling = std::exchange(pending_ruling_, std::string());
     if (!j.first_wrong_description.empty()) return;
     if (any) {
       j.first_wrong_description = fmt::format("any-hit: {} says {}, {} says {}", o_.plugin_label,
@@ -135,6 +153,7 @@ class Judge {
                                               describe_hit(plugin_.hits[i]), o_.reference,
                                               describe_hit(reference_.hits[i]));
     }
+    j.first_wrong_description += ruling;
   }
 
   GradeScene& scene_;
@@ -142,8 +161,9 @@ class Judge {
   const Answers& plugin_;
   const Answers& reference_;
   const JudgeOptions& o_;
-  std::string second_name_;
+  BackendTraits claims_;
   std::size_t arbitrations_ = 0;
+  std::string pending_ruling_;  // the arbiter's word on the answer being recorded as wrong (empty: not ruled)
 };
 
 }  // namespace

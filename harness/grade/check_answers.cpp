@@ -89,7 +89,7 @@ std::string summary_of_allowed(const Judgement& j) {
   std::string s;
   if (j.edge) s += fmt::format(", {} edge", j.edge);
   if (j.tie) s += fmt::format(", {} tie", j.tie);
-  if (j.overruled) s += fmt::format(", {} where {} overruled the reference", j.overruled, j.second_opinion);
+  if (j.overruled) s += fmt::format(", {} where {} arithmetic overruled the reference", j.overruled, j.second_opinion);
   return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
 }
 
@@ -104,7 +104,8 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
   const std::unique_ptr<Backend> plugin = ctx.built_plugin();
   const Answers mine = trace_rays(*plugin, set.rays, set.queries);
   const Answers expected = trace_rays(ctx.scene.reference(reference), set.rays, set.queries);
-  const Judgement j = judge(ctx.scene, set.rays, mine, expected, {set.queries, reference, tie_rule, "plugin"});
+  const Judgement j = judge(ctx.scene, set.rays, mine, expected,
+                            {set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
 
   const std::size_t answers = set.rays.size() * (set.queries == Queries::Both ? 2 : 1);
   CheckVerdict v;
@@ -118,6 +119,7 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                {"tie", j.tie},
                {"overruled", j.overruled},
                {"unarbitrated", j.unarbitrated},
+               {"ruled", j.ruled},
                {"reference", reference},
                {"second_opinion", j.second_opinion}};
   if (v.passed) {

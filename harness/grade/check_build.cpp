@@ -27,7 +27,8 @@ CheckVerdict run_build_check(CheckContext& ctx) {
   const Answers mine = trace_rays(*plugin, rays, Queries::Both);
   const Answers expected = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Both);
   const Judgement j = judge(ctx.scene, rays, mine, expected,
-                            {Queries::Both, ctx.reference_name(), ctx.env.plugin.traits().honours_ties, "plugin"});
+                            {Queries::Both, ctx.reference_name(), ctx.env.plugin.traits().honours_ties, "plugin",
+                             ctx.env.plugin.traits().watertight});
 
   CheckVerdict v;
   v.figures = {{"build_seconds", stats.build_seconds},

@@ -78,7 +78,8 @@ CheckVerdict run_performance_check(CheckContext& ctx) {
   const Answers answers = trace_rays(*plugin, rays, Queries::Closest);
   const Answers expected = trace_rays(ctx.scene.reference("embree"), rays, Queries::Closest);
   const Judgement j = judge(ctx.scene, rays, answers, expected,
-                            {Queries::Closest, "embree", ctx.env.plugin.traits().honours_ties, "plugin"});
+                            {Queries::Closest, "embree", ctx.env.plugin.traits().honours_ties, "plugin",
+                             ctx.env.plugin.traits().watertight});
 
   const double vs_bvh = theirs.rays_per_second > 0.0 ? mine.rays_per_second / theirs.rays_per_second : 0.0;
   const double vs_fast = embree.rays_per_second > 0.0 ? mine.rays_per_second / embree.rays_per_second : 0.0;

@@ -19,4 +19,9 @@ const Backend& GradeScene::reference(const std::string& backend) {
   return *slot;
 }
 
+const arbiter::Arbiter& GradeScene::arbiter() {
+  if (!arbiter_) arbiter_ = std::make_unique<arbiter::Arbiter>(scene_->geometry);
+  return *arbiter_;
+}
+
 }  // namespace twinray::grade
