@@ -10,6 +10,7 @@
 #include "core/util/input_error.h"
 
 #include "tests/chi_square.h"
+#include "tests/environment_test_util.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -227,17 +228,8 @@ TEST_F(EnvironmentBilinear, IrradianceMatchesAnIndependentIntegralAndTheSampledE
   // The light's own importance sampler, for a tilted normal: unbiased against the quadrature.
   const glm::vec3 n = glm::normalize(glm::vec3(0.3f, -0.6f, 0.5f));
   const double reference = environment_irradiance(*light, n, 16).x;
-  const int count = 200000;
-  double sum = 0.0, sum2 = 0.0;
-  Rng rng(9, 1);
-  for (int i = 0; i < count; ++i) {
-    const EnvironmentLight::Sample s = light->sample(glm::vec2(rng.next_float(), rng.next_float()));
-    const double v = s.pdf > 0.0f ? s.radiance.x * std::max(0.0f, glm::dot(n, s.dir)) / s.pdf : 0.0;
-    sum += v;
-    sum2 += v * v;
-  }
-  const double mean = sum / count, std_error = std::sqrt((sum2 / count - mean * mean) / count);
-  EXPECT_NEAR(mean, reference, 5.0 * std_error + 1e-3 * reference);
+  const testing::SampledEstimate e = testing::sampled_red_irradiance(*light, n, 200000, Rng(9, 1));
+  EXPECT_NEAR(e.mean, reference, 5.0 * e.std_error + 1e-3 * reference);
 }
 
 TEST_F(EnvironmentBilinear, AMapOneRowHighIsAnInputError) {
