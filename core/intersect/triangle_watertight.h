@@ -56,7 +56,7 @@ struct TriangleRay {
   int kx = 0, ky = 1, kz = 2;  // permutation: kz = axis of the largest |dir| component (woop_axes.h)
   float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
   float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
-  glm::dvec3 org{0.0}, dir{0.0, 0.0, 1.0};  // the ray itself in double, for the t, u, v of triangle_refine.h
+  refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
 };
 
 inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir) {
@@ -71,20 +71,27 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   r.ox = org[r.kx];
   r.oy = org[r.ky];
   r.oz = org[r.kz];
-  r.org = glm::dvec3(org);
-  r.dir = glm::dvec3(dir);
+  refine_detail::set_ray(r.refine, org, dir);
   return r;
 }
 
 // The refinement of a triangle the edge test accepted (triangle_refine.h), for float vertices: the correctly
-// rounded t when it lies in [tmin, tmax], and the barycentrics of that crossing.
-inline bool refine_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-                              float tmin, float tmax, float& t) {
-  return refine_triangle_t(ray.org, ray.dir, glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), tmin, tmax, t);
+// rounded t when it lies in [tmin, tmax]; only whether it does (any-hit queries); the barycentrics of that
+// crossing. Always inlined into the leaf tests, so that the vector code is compiled for the kernel's
+// instruction set.
+[[gnu::always_inline]] inline bool refine_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1,
+                                                     const glm::vec3& p2, float tmin, float tmax, float& t) {
+  return refine_detail::refine_t(ray.refine, p0, p1, p2, tmin, tmax, t);
 }
-inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-                                  float t, float& u, float& v) {
-  refine_triangle_uv(ray.org, ray.dir, glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), t, u, v);
+[[gnu::always_inline]] inline bool refine_triangle_in_interval(const TriangleRay& ray, const glm::vec3& p0,
+                                                               const glm::vec3& p1, const glm::vec3& p2, float tmin,
+                                                               float tmax) {
+  return refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax);
+}
+[[gnu::always_inline]] inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0,
+                                                         const glm::vec3& p1, const glm::vec3& p2, float t, float& u,
+                                                         float& v) {
+  refine_detail::refine_uv(ray.refine, p0, p1, p2, t, u, v);
 }
 
 namespace triangle_detail {
