@@ -157,9 +157,17 @@ struct Quotient {
 // a.n with their bounds.
 struct Crossing {
   Vec4 p0, e1, e2, a;
+  Vec4 n;  // e1 x e2
   Quotient quotient;
   double num = 0.0, num_err = 0.0;  // a.n and its bound
 };
+
+// e1 x e2 and its absolute terms: (|e1_j e2_k| + |e1_k e2_j|)_i.
+TWINRAY_REFINE_INLINE void cross_with_terms(const Vec4& e1, const Vec4& e2, Vec4& n, Vec4& n_terms) {
+  const Vec4 m1 = yzx(e1) * zxy(e2), m2 = zxy(e1) * yzx(e2);
+  n = m1 - m2;
+  n_terms = abs(m1) + abs(m2);
+}
 
 // Fills `c`; false when den's sign is not certain (or Ed |r| > 1/2, where the cheap w would not bound the
 // exact one). 1 / (1 - x) <= 1 + 2x for 0 <= x <= 1/2 gives w without a second division.
@@ -169,10 +177,10 @@ TWINRAY_REFINE_INLINE bool crossing(const RefineRay& ray, const Vec4& p0, const 
   c.e1 = p1 - p0;
   c.e2 = p2 - p0;
   c.a = p0 - ray.o;
-  const Vec4 m1 = yzx(c.e1) * zxy(c.e2), m2 = zxy(c.e1) * yzx(c.e2);
-  const Vec4 n = m1 - m2, n_terms = abs(m1) + abs(m2);
+  Vec4 n_terms;
+  cross_with_terms(c.e1, c.e2, c.n, n_terms);
   // (den, its absolute terms, a.n, its absolute terms)
-  const Vec4 s = sums(ray.d * n, ray.abs_d * n_terms, c.a * n, abs(c.a) * n_terms);
+  const Vec4 s = sums(ray.d * c.n, ray.abs_d * n_terms, c.a * c.n, abs(c.a) * n_terms);
   Quotient& q = c.quotient;
   q.den_err = kSumBound * s.v[1];
   q.abs_den = std::fabs(s.v[0]);
@@ -182,6 +190,15 @@ TWINRAY_REFINE_INLINE bool crossing(const RefineRay& ray, const Vec4& p0, const 
   q.r = 1.0 / s.v[0];
   q.w = q.r * q.r * (1.0 + 2.0 * q.den_err * std::fabs(q.r));
   return true;
+}
+
+// normalize(n) rounded to float, (0, 0, 1) for a zero n (collinear vertices, which the edge test never hits):
+// the geometric normal. One function for triangle_geometric_normal and refine_uv's, so both give the same
+// bits.
+inline glm::vec3 unit_normal(double nx, double ny, double nz) {
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
+  return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
 }
 
 // The floats that the ends of [x - err, x + err] round to, the ends widened past their own rounding: every
@@ -265,16 +282,21 @@ inline std::atomic<std::uint64_t> exact_fallbacks{0};
   if (!exact::triangle_crossing_attributes({o, d, p0, p1, p2}, t, u, v)) return false;
   return std::isfinite(t);
 }
-TWINRAY_REFINE_INLINE bool exact_crossing(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
-                                          float& t, float& u, float& v) {
-  return exact_crossing(store(ray.o), store(ray.d), store(p0), store(p1), store(p2), t, u, v);
+// The exact path for vertices given as glm vectors, read again from their memory: the hot path need not
+// keep copies of them alive for it. (A leaf test passes its own, reading its block.)
+template <typename Vec3>
+[[gnu::cold, gnu::noinline]] inline bool exact_crossing_of(const RefineRay& ray, const Vec3& p0, const Vec3& p1,
+                                                           const Vec3& p2, float& t, float& u, float& v) {
+  return exact_crossing(store(ray.o), store(ray.d), glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), t, u, v);
 }
 
 // The crossing parameter of the line o + t d with triangle (p0, p1, p2), which the caller's edge test has
 // accepted: false when there is no crossing (see above) or its correctly rounded t lies outside
-// [tmin, tmax]; otherwise the correctly rounded t. Inputs are doubles holding floats.
+// [tmin, tmax]; otherwise the correctly rounded t. Inputs are doubles holding floats; `exact(t, u, v)` is
+// the exact path for the same triangle.
+template <typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
-                                    float tmin, float tmax, float& t_out) {
+                                      float tmin, float tmax, float& t_out, const Exact& exact) {
   Crossing c;
   float t = 0.0f;
   bool certain = false;
@@ -288,7 +310,7 @@ TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, cons
   }
   if (!certain) {
     float u, v;
-    if (!exact_crossing(ray, p0, p1, p2, t, u, v)) return false;
+    if (!exact(t, u, v)) return false;
   }
   if (!(t >= tmin && t <= tmax)) return false;
   t_out = t;
@@ -297,8 +319,9 @@ TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, cons
 
 // Whether that correctly rounded t lies in [tmin, tmax], without the t itself (any-hit queries): an
 // interval inside [tmin, tmax] decides, certified or not.
+template <typename Exact>
 TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
-                                              float tmin, float tmax) {
+                                                float tmin, float tmax, const Exact& exact) {
   Crossing c;
   if (crossing(ray, p0, p1, p2, c)) {
     const Ends ends = t_ends(c);
@@ -309,42 +332,72 @@ TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4
     if (ends.lo > tmin && ends.hi < tmax) return true;
   }
   float t;
-  return refine_t_v(ray, p0, p1, p2, tmin, tmax, t);
+  return refine_t_v(ray, p0, p1, p2, tmin, tmax, t, exact);
 }
 
 // The barycentrics (u weights p1, v weights p2) of that crossing, correctly rounded after clamping to
 // [0, 1]; `t` is what refine_t_v returned for the same inputs. Kept apart so that a closest-hit traversal
-// computes them once, for the winner.
+// computes them once, for the winner; with its geometric normal when `ng` is given (from the same e1 x e2).
+template <typename Exact>
 TWINRAY_REFINE_INLINE void refine_uv_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2, float t,
-                                     float& u, float& v) {
+                                       float& u, float& v, glm::vec3* ng, const Exact& exact) {
   Crossing c;
-  if (crossing(ray, p0, p1, p2, c) && certify_barycentrics(ray, c, t, u, v)) return;
+  const bool den_certain = crossing(ray, p0, p1, p2, c);
+  if (ng != nullptr) *ng = unit_normal(c.n.v[0], c.n.v[1], c.n.v[2]);
+  if (den_certain && certify_barycentrics(ray, c, t, u, v)) return;
   float t_exact;
-  exact_crossing(ray, p0, p1, p2, t_exact, u, v);
+  exact(t_exact, u, v);
 }
 
 // The entry points, for vertices and rays given as glm vectors of floats (the leaf tests) or of doubles
-// holding floats (the exact backend, tests): the vectors stay inside.
+// holding floats (the exact backend, tests): the vectors stay inside. `exact` as above; by default
+// exact_crossing_of the same vertices.
 template <typename Vec3>
 TWINRAY_REFINE_INLINE void set_ray(RefineRay& ray, const Vec3& o, const Vec3& d) {
   ray.o = load(o);
   ray.d = load(d);
   ray.abs_d = abs(ray.d);
 }
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
+                                    float tmax, float& t, const Exact& exact) {
+  return refine_t_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, exact);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                              float tmin, float tmax, const Exact& exact) {
+  return refine_in_interval_v(ray, load(p0), load(p1), load(p2), tmin, tmax, exact);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE void refine_uv(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float t,
+                                     float& u, float& v, glm::vec3* ng, const Exact& exact) {
+  refine_uv_v(ray, load(p0), load(p1), load(p2), t, u, v, ng, exact);
+}
 template <typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
                                     float tmax, float& t) {
-  return refine_t_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t);
+  return refine_t(ray, p0, p1, p2, tmin, tmax, t,
+                  [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
                                               float tmin, float tmax) {
-  return refine_in_interval_v(ray, load(p0), load(p1), load(p2), tmin, tmax);
+  return refine_in_interval(ray, p0, p1, p2, tmin, tmax,
+                            [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>
 TWINRAY_REFINE_INLINE void refine_uv(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float t,
-                                     float& u, float& v) {
-  refine_uv_v(ray, load(p0), load(p1), load(p2), t, u, v);
+                                     float& u, float& v, glm::vec3* ng = nullptr) {
+  refine_uv(ray, p0, p1, p2, t, u, v, ng,
+            [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+// The geometric normal of a triangle: unit_normal of the same e1 x e2 as crossing() computes.
+template <typename Vec3>
+TWINRAY_REFINE_INLINE glm::vec3 geometric_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec4 q0 = load(p0);
+  Vec4 n, n_terms;
+  cross_with_terms(load(p1) - q0, load(p2) - q0, n, n_terms);
+  return unit_normal(n.v[0], n.v[1], n.v[2]);
 }
 
 #undef TWINRAY_REFINE_INLINE

@@ -88,6 +88,13 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
                                                                float tmax) {
   return refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax);
 }
+// The barycentrics and the geometric normal (triangle_geometric_normal's bits) at once, from one e1 x e2:
+// what a closest-hit traversal asks for its winner.
+[[gnu::always_inline]] inline void triangle_hit_attributes(const TriangleRay& ray, const glm::vec3& p0,
+                                                           const glm::vec3& p1, const glm::vec3& p2, float t,
+                                                           float& u, float& v, glm::vec3& ng) {
+  refine_detail::refine_uv(ray.refine, p0, p1, p2, t, u, v, &ng);
+}
 [[gnu::always_inline]] inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0,
                                                          const glm::vec3& p1, const glm::vec3& p2, float t, float& u,
                                                          float& v) {
@@ -190,16 +197,10 @@ inline bool intersect_triangle_t(const TriangleRay& ray, const glm::vec3& p0, co
 
 // normalize(cross(p1 - p0, p2 - p0)), evaluated in double so that tiny (but hit) triangles, whose float
 // cross product would underflow, still get a unit normal. A triangle whose vertices are exactly collinear
-// cannot be hit (its determinant is 0), so the fallback only guards against misuse.
+// cannot be hit (its determinant is 0), so the fallback (0, 0, 1) only guards against misuse. The same bits
+// as the normal a closest-hit traversal takes from the winner's kept crossing (triangle_refine.h).
 inline glm::vec3 triangle_geometric_normal(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
-  const double e1x = double(p1.x) - p0.x, e1y = double(p1.y) - p0.y, e1z = double(p1.z) - p0.z;
-  const double e2x = double(p2.x) - p0.x, e2y = double(p2.y) - p0.y, e2z = double(p2.z) - p0.z;
-  const double nx = e1y * e2z - e1z * e2y;
-  const double ny = e1z * e2x - e1x * e2z;
-  const double nz = e1x * e2y - e1y * e2x;
-  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
-  return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
+  return refine_detail::geometric_normal(p0, p1, p2);
 }
 
 }  // namespace twinray
