@@ -32,9 +32,7 @@ namespace triangle_block_detail {
                                           block.vertex(2, lane), t, u, v);
 }
 
-// What a block test reports for the lanes it hits: t, u and v; t only; only that a lane is hit (any-hit
-// queries: the correctly rounded t need not be known when its interval lies inside [tmin, tmax]).
-enum class Report { kHit, kT, kAny };
+using triangle_detail::Report;  // what the test reports for the lanes it hits (triangle_watertight.h)
 
 template <Report kReport>
 [[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
@@ -91,7 +89,7 @@ template <Report kReport>
   // Rays through an edge or a vertex: the scalar test decides them in double, with the fill rule.
   for (unsigned m = exact_zero; m != 0; m &= m - 1) {
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
-    if (triangle_detail::intersect<kReport == Report::kHit>(ray, block.vertex(0, lane), block.vertex(1, lane),
+    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane),
                                                             block.vertex(2, lane), tmin, tmax, out.t[lane],
                                                             out.u[lane], out.v[lane]))
       hits |= 1u << lane;

@@ -129,8 +129,12 @@ inline bool owns_edge(float ex, float ey, bool positive) {
   return ey > 0.0f || (ey == 0.0f && ex > 0.0f);
 }
 
-// The watertight edge test, then the refinement: t only, or t, u and v.
-template <bool kBarycentrics>
+// What a triangle test reports for a hit: t, u and v; t only; only that there is one (any-hit queries: the
+// correctly rounded t need not be known when its interval lies inside [tmin, tmax]).
+enum class Report { kHit, kT, kAny };
+
+// The watertight edge test, then the refinement, reporting as above.
+template <Report kReport>
 inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, float tmin,
                       float tmax, float& t_out, float& u_out, float& v_out) {
   using triangle_detail::rounded;
@@ -173,9 +177,13 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
 
   const float det = u + v + w;
   if (det == 0.0f) return false;  // parallel, in-plane or projected to a segment: see conventions above
-  if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, t_out)) return false;
-  if constexpr (kBarycentrics) triangle_barycentrics(ray, p0, p1, p2, t_out, u_out, v_out);
-  return true;
+  if constexpr (kReport == Report::kAny) {
+    return refine_triangle_in_interval(ray, p0, p1, p2, tmin, tmax);
+  } else {
+    if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, t_out)) return false;
+    if constexpr (kReport == Report::kHit) triangle_barycentrics(ray, p0, p1, p2, t_out, u_out, v_out);
+    return true;
+  }
 }
 
 }  // namespace triangle_detail
@@ -184,7 +192,7 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
 // barycentrics (u for p1, v for p2), correctly rounded, and returns true.
 inline bool intersect_triangle(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                float tmin, float tmax, float& t_out, float& u_out, float& v_out) {
-  return triangle_detail::intersect<true>(ray, p0, p1, p2, tmin, tmax, t_out, u_out, v_out);
+  return triangle_detail::intersect<triangle_detail::Report::kHit>(ray, p0, p1, p2, tmin, tmax, t_out, u_out, v_out);
 }
 
 // The same hit decision and t, without the barycentrics: a closest-hit traversal asks
@@ -192,7 +200,16 @@ inline bool intersect_triangle(const TriangleRay& ray, const glm::vec3& p0, cons
 inline bool intersect_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                  float tmin, float tmax, float& t_out) {
   float unused_u, unused_v;
-  return triangle_detail::intersect<false>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u, unused_v);
+  return triangle_detail::intersect<triangle_detail::Report::kT>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u,
+                                                                 unused_v);
+}
+
+// Only whether the ray hits the triangle within [tmin, tmax] (any-hit queries).
+inline bool intersect_triangle_any(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1,
+                                   const glm::vec3& p2, float tmin, float tmax) {
+  float unused_t, unused_u, unused_v;
+  return triangle_detail::intersect<triangle_detail::Report::kAny>(ray, p0, p1, p2, tmin, tmax, unused_t, unused_u,
+                                                                   unused_v);
 }
 
 // normalize(cross(p1 - p0, p2 - p0)), evaluated in double so that tiny (but hit) triangles, whose float
