@@ -89,9 +89,8 @@ template <Report kReport>
   // Rays through an edge or a vertex: the scalar test decides them in double, with the fill rule.
   for (unsigned m = exact_zero; m != 0; m &= m - 1) {
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
-    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane),
-                                                            block.vertex(2, lane), tmin, tmax, out.t[lane],
-                                                            out.u[lane], out.v[lane]))
+    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane),
+                                            tmin, tmax, out.t[lane], out.u[lane], out.v[lane]))
       hits |= 1u << lane;
   }
   return hits;
@@ -106,8 +105,9 @@ template <Report kReport>
   return triangle_block_detail::intersect<triangle_block_detail::Report::kHit>(ray, block, lanes, tmin, tmax, out);
 }
 
-// The same, writing only t (out.u, out.v are left as they were): for any-hit queries, and for closest-hit
-// traversals that ask triangle_barycentrics (triangle_watertight.h) for the winner's u, v once at the end.
+// The same, writing only t (out.u, out.v are left as they were): for closest-hit traversals that ask for the
+// winner's u, v once at the end (triangle_block_hit_attributes below, or triangle_barycentrics), and any-hit
+// queries that want t (intersect_triangle_block_any is cheaper when only the answer matters).
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_t(const TriangleRay& ray, const TriangleBlock& block,
                                                                   unsigned lanes, float tmin, float tmax, BlockHits& out) {
   return triangle_block_detail::intersect<triangle_block_detail::Report::kT>(ray, block, lanes, tmin, tmax, out);
