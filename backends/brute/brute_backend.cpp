@@ -44,16 +44,15 @@ class BruteBackend final : public Backend {
     for (const TriangleMesh& mesh : geometry_->meshes) {
       for (std::size_t i = 0; i < mesh.indices.size(); ++i) {
         const glm::uvec3& tri = mesh.indices[i];
-        float t, u, v;
-        // tmax = hit.t (closed): an equidistant hit still reaches `precedes`.
-        if (!intersect_triangle(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
-                                ray.tmin, std::min(ray.tmax, hit.t), t, u, v))
+        float t;
+        // tmax = hit.t (closed): an equidistant hit still reaches `precedes`. t only: the winner's u, v are
+        // computed once, at the end.
+        if (!intersect_triangle_t(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
+                                  ray.tmin, std::min(ray.tmax, hit.t), t))
           continue;
         const auto prim_id = static_cast<std::uint32_t>(i);
         if (!precedes(t, mesh.geom_id, prim_id, hit)) continue;
         hit.t = t;
-        hit.u = u;
-        hit.v = v;
         hit.geom_id = mesh.geom_id;
         hit.prim_id = prim_id;
         best_mesh = &mesh;
@@ -78,7 +77,7 @@ class BruteBackend final : public Backend {
     } else if (best_mesh != nullptr) {
       const glm::uvec3& tri = best_mesh->indices[hit.prim_id];
       const std::vector<glm::vec3>& p = best_mesh->positions;
-      hit.ng = triangle_geometric_normal(p[tri.x], p[tri.y], p[tri.z]);
+      triangle_hit_attributes(tri_ray, p[tri.x], p[tri.y], p[tri.z], hit.t, hit.u, hit.v, hit.ng);
     }
     return hit.found();
   }
@@ -92,9 +91,8 @@ class BruteBackend final : public Backend {
     for (const TriangleMesh& mesh : geometry_->meshes) {
       for (const glm::uvec3& tri : mesh.indices) {
         ++tested;
-        float t, u, v;
-        if (intersect_triangle(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
-                               ray.tmin, ray.tmax, t, u, v)) {
+        if (intersect_triangle_any(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
+                                   ray.tmin, ray.tmax)) {
           found = true;
           break;
         }

@@ -91,13 +91,13 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   float root_entry = 0.0f;
   std::uint32_t index = 0;
   const float box_tmin = cull_min(ray.tmin);
-  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, cull_max(tmax), root_entry);
+  float box_tmax = cull_max(tmax);  // follows tmax
+  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   while (more) {
     observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      const float box_tmax = cull_max(tmax);
       more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
              pop_next(stack, size, box_tmax, index);
       continue;
@@ -115,6 +115,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
           const PrimitiveKey key = prims.triangle_keys[slot + lane];
           if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
           hit.t = tmax = found.t[lane];
+          box_tmax = cull_max(tmax);
           hit.geom_id = key.geom_id;
           hit.prim_id = key.prim_id;
           best_is_sphere = false;
@@ -129,13 +130,14 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         const PrimitiveKey key = prims.sphere_keys[i];
         if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
         hit.t = tmax = t;
+        box_tmax = cull_max(tmax);
         hit.geom_id = key.geom_id;
         hit.prim_id = key.prim_id;
         best_is_sphere = true;
         best_index = i;
       }
     }
-    more = pop_next(stack, size, cull_max(tmax), index);
+    more = pop_next(stack, size, box_tmax, index);
   }
 
   if (stats) {
@@ -147,10 +149,8 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    const glm::vec3 p0 = prims.triangle_vertex(best_index, 0), p1 = prims.triangle_vertex(best_index, 1),
-                    p2 = prims.triangle_vertex(best_index, 2);
-    triangle_barycentrics(tri_ray, p0, p1, p2, hit.t, hit.u, hit.v);
-    hit.ng = triangle_geometric_normal(p0, p1, p2);
+    triangle_block_hit_attributes(tri_ray, prims.block_of(best_index), best_index % kTriangleBlockLanes, hit.t, hit.u,
+                                  hit.v, hit.ng);
   }
   return true;
 }
@@ -189,9 +189,8 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
       for (std::uint32_t slot = first; slot < first + count && !found; slot += kTriangleBlockLanes) {
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
-        BlockHits unused;
-        found = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
-                                           unused) != 0;
+        found = intersect_triangle_block_any(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin,
+                                             ray.tmax) != 0;
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {

@@ -24,7 +24,17 @@ struct alignas(16) BlockHits {
 
 namespace triangle_block_detail {
 
-template <bool kBarycentrics>
+// The exact path of the refinement for one lane, reading the block again: the hot path keeps no copy of the
+// vertices alive for it.
+[[gnu::cold, gnu::noinline]] inline bool exact_crossing_of_lane(const TriangleRay& ray, const TriangleBlock& block,
+                                                               unsigned lane, float& t, float& u, float& v) {
+  return refine_detail::exact_crossing_of(ray.refine, block.vertex(0, lane), block.vertex(1, lane),
+                                          block.vertex(2, lane), t, u, v);
+}
+
+using triangle_detail::Report;  // what the test reports for the lanes it hits (triangle_watertight.h)
+
+template <Report kReport>
 [[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
                                                  float tmin, float tmax, BlockHits& out) {
   const auto row = [&](int vert, int axis) { return _mm_load_ps(block.v[vert][axis]); };
@@ -53,6 +63,7 @@ template <bool kBarycentrics>
   const __m128 any_positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
   const unsigned mixed_signs = static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(any_negative, any_positive)));
   unsigned candidates = lanes & ~exact_zero & ~mixed_signs;
+  if ((candidates | exact_zero) == 0) return 0;  // the common case: the ray passes beside all four
 
   // Lanes whose float determinant is 0 miss (parallel, in-plane or projected to a segment), as in the scalar test.
   candidates &= ~static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(_mm_add_ps(_mm_add_ps(u, v), w), zero)));
@@ -62,16 +73,24 @@ template <bool kBarycentrics>
   for (unsigned m = candidates; m != 0; m &= m - 1) {
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
     const glm::vec3 p0 = block.vertex(0, lane), p1 = block.vertex(1, lane), p2 = block.vertex(2, lane);
-    if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, out.t[lane])) continue;
-    if constexpr (kBarycentrics) triangle_barycentrics(ray, p0, p1, p2, out.t[lane], out.u[lane], out.v[lane]);
+    const auto exact = [&ray, &block, lane](float& te, float& ue, float& ve) {
+      return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+    };
+    if constexpr (kReport == Report::kAny) {
+      if (refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax, exact)) return 1u << lane;
+      continue;
+    } else {
+      if (!refine_detail::refine_t(ray.refine, p0, p1, p2, tmin, tmax, out.t[lane], exact)) continue;
+      if constexpr (kReport == Report::kHit)
+        refine_detail::refine_uv(ray.refine, p0, p1, p2, out.t[lane], out.u[lane], out.v[lane], nullptr, exact);
+    }
     hits |= 1u << lane;
   }
   // Rays through an edge or a vertex: the scalar test decides them in double, with the fill rule.
   for (unsigned m = exact_zero; m != 0; m &= m - 1) {
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
-    if (triangle_detail::intersect<kBarycentrics>(ray, block.vertex(0, lane), block.vertex(1, lane),
-                                                  block.vertex(2, lane), tmin, tmax, out.t[lane], out.u[lane],
-                                                  out.v[lane]))
+    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane),
+                                            tmin, tmax, out.t[lane], out.u[lane], out.v[lane]))
       hits |= 1u << lane;
   }
   return hits;
@@ -83,14 +102,35 @@ template <bool kBarycentrics>
 // [tmin, tmax] and their t, u, v in `out`.
 [[gnu::always_inline]] inline unsigned intersect_triangle_block(const TriangleRay& ray, const TriangleBlock& block,
                                                                 unsigned lanes, float tmin, float tmax, BlockHits& out) {
-  return triangle_block_detail::intersect<true>(ray, block, lanes, tmin, tmax, out);
+  return triangle_block_detail::intersect<triangle_block_detail::Report::kHit>(ray, block, lanes, tmin, tmax, out);
 }
 
-// The same, writing only t (out.u, out.v are left as they were): for any-hit queries, and for closest-hit
-// traversals that ask triangle_barycentrics (triangle_watertight.h) for the winner's u, v once at the end.
+// The same, writing only t (out.u, out.v are left as they were): for closest-hit traversals that ask for the
+// winner's u, v once at the end (triangle_block_hit_attributes below, or triangle_barycentrics), and any-hit
+// queries that want t (intersect_triangle_block_any is cheaper when only the answer matters).
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_t(const TriangleRay& ray, const TriangleBlock& block,
                                                                   unsigned lanes, float tmin, float tmax, BlockHits& out) {
-  return triangle_block_detail::intersect<false>(ray, block, lanes, tmin, tmax, out);
+  return triangle_block_detail::intersect<triangle_block_detail::Report::kT>(ray, block, lanes, tmin, tmax, out);
+}
+
+// u, v and the geometric normal of lane `lane`'s crossing at the t a block test reported for it (what
+// triangle_hit_attributes gives for the same triangle): a closest-hit traversal's winner.
+[[gnu::always_inline]] inline void triangle_block_hit_attributes(const TriangleRay& ray, const TriangleBlock& block,
+                                                                 unsigned lane, float t, float& u, float& v,
+                                                                 glm::vec3& ng) {
+  refine_detail::refine_uv(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), t, u, v,
+                           &ng, [&ray, &block, lane](float& te, float& ue, float& ve) {
+                             return triangle_block_detail::exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+                           });
+}
+
+// Whether any lane is hit within [tmin, tmax] (a non-zero mask of one of them): any-hit queries. A crossing
+// whose t interval lies inside [tmin, tmax] counts without its rounding being certified.
+[[gnu::always_inline]] inline unsigned intersect_triangle_block_any(const TriangleRay& ray, const TriangleBlock& block,
+                                                                    unsigned lanes, float tmin, float tmax) {
+  BlockHits unused;
+  return triangle_block_detail::intersect<triangle_block_detail::Report::kAny>(ray, block, lanes, tmin, tmax,
+                                                                               unused);
 }
 
 }  // namespace twinray

@@ -42,12 +42,22 @@
 // subnormal *float inputs* as 0 in the float test and in this double path alike; the guarantee is then for
 // those inputs.)
 //
+// Evaluation. The three coordinates of a vector sit in one SIMD vector (x, y, z, 0), so a difference, a
+// product or an absolute value of three components is one vector operation, a cross product two products and
+// a difference of permuted vectors, and the four sums a t needs (den, num and the absolute sums of their
+// bounds) come out of one transposing reduction. The fourth lane stays exactly 0 through every operation
+// (0 - 0, 0 * x, |0|), so it adds nothing to a sum. The operations are the same IEEE operations as in scalar
+// code; only the order of the three-term additions differs, and each term still passes through at most two
+// of them, which is what the bound counts. (GCC's generic vectors: one AVX instruction per operation in the
+// AVX2 and AVX-512 kernels, two SSE2 instructions elsewhere.)
+//
 // Cost (docs/bvh-backend.md): refine_triangle_t rejects a candidate outside [tmin, tmax] after the t estimate
 // and its bound (the triangle a secondary ray starts from, crossings beyond the closest hit so far) and
 // certifies the t of one inside; refine_triangle_uv certifies the barycentrics, which a closest-hit traversal
-// asks for once, for the winner. The exact path is rare: ties and near-ties of the rounding, a barycentric of
-// exactly 0 (a ray through an edge), extreme slivers at extreme angles; none in 10 000 rays of each kind on
-// the dragon and Sponza (refine_detail::exact_fallbacks counts it).
+// asks for once, for the winner; refine_triangle_in_interval only decides membership, for any-hit queries.
+// The exact path is rare: ties and near-ties of the rounding, a barycentric of exactly 0 (a ray through an
+// edge), extreme slivers at extreme angles; none in 10 000 rays of each kind on the dragon and Sponza
+// (refine_detail::exact_fallbacks counts it).
 
 #include "core/exact/exact_triangle.h"
 
@@ -61,11 +71,17 @@ namespace twinray {
 
 namespace refine_detail {
 
+using Vec2d = double __attribute__((vector_size(16)));
+using Vec2u = std::uint64_t __attribute__((vector_size(16)));
+using Vec4d = double __attribute__((vector_size(32)));
+using Vec4u = std::uint64_t __attribute__((vector_size(32)));
+
 inline constexpr double kUnit = 0x1p-53;
 // The bound constant for the sums of products above: 10u P^ (see the header comment).
 inline constexpr double kSumBound = 10.0 * kUnit;
 
-// Plain comparisons rather than std::fmax, which is a library call unless the compiler may assume no NaN.
+// Scalar helpers (the exact backend's filters, backends/exact/exact_filters.h, share them). Plain comparisons
+// rather than std::fmax, which is a library call unless the compiler may assume no NaN.
 inline double max2(double a, double b) { return a > b ? a : b; }
 inline double max_abs(const glm::dvec3& v) { return max2(std::fabs(v.x), max2(std::fabs(v.y), std::fabs(v.z))); }
 inline double sum_abs(const glm::dvec3& v) { return std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z); }
@@ -73,20 +89,61 @@ inline double dot(const glm::dvec3& a, const glm::dvec3& b) { return a.x * b.x +
 inline glm::dvec3 cross(const glm::dvec3& a, const glm::dvec3& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-// a x b and, per component, |a_j b_k| + |a_k b_j| (the absolute terms of the bound).
-inline glm::dvec3 cross_with_terms(const glm::dvec3& a, const glm::dvec3& b, glm::dvec3& terms) {
-  const double p[6] = {a.y * b.z, a.z * b.y, a.z * b.x, a.x * b.z, a.x * b.y, a.y * b.x};
-  terms = {std::fabs(p[0]) + std::fabs(p[1]), std::fabs(p[2]) + std::fabs(p[3]), std::fabs(p[4]) + std::fabs(p[5])};
-  return {p[0] - p[1], p[2] - p[3], p[4] - p[5]};
+
+// Every helper below is always inlined, so that the vector code is compiled for the instruction set of the
+// leaf test that uses it (the kernels choose theirs by target attributes).
+#define TWINRAY_REFINE_INLINE [[gnu::always_inline]] inline
+
+// (x, y, z, 0) in a GCC / Clang generic vector (see "Evaluation" above). Wrapped in a struct because a
+// function returning a bare 32-byte vector has another ABI with AVX than without (GCC warns, -Wpsabi),
+// while a 32-byte struct is returned in memory either way (and, inlined, never is).
+struct Vec4 {
+  Vec4d v;
+};
+TWINRAY_REFINE_INLINE Vec4 operator+(const Vec4& a, const Vec4& b) { return {a.v + b.v}; }
+TWINRAY_REFINE_INLINE Vec4 operator-(const Vec4& a, const Vec4& b) { return {a.v - b.v}; }
+TWINRAY_REFINE_INLINE Vec4 operator*(const Vec4& a, const Vec4& b) { return {a.v * b.v}; }
+TWINRAY_REFINE_INLINE Vec4 operator*(double s, const Vec4& a) { return {s * a.v}; }
+TWINRAY_REFINE_INLINE Vec4 operator-(const Vec4& a) { return {-a.v}; }
+
+// Three scalar conversions: from a vertex scattered over a structure-of-arrays block, GCC assembles them with
+// fewer instructions than a float vector converted at once.
+TWINRAY_REFINE_INLINE Vec4 load(const glm::vec3& p) {
+  return {Vec4d{static_cast<double>(p.x), static_cast<double>(p.y), static_cast<double>(p.z), 0.0}};
 }
-inline double abs_dot(const glm::dvec3& a, const glm::dvec3& b) {
-  return std::fabs(a.x) * b.x + std::fabs(a.y) * b.y + std::fabs(a.z) * b.z;
+TWINRAY_REFINE_INLINE Vec4 load(const glm::dvec3& p) { return {Vec4d{p.x, p.y, p.z, 0.0}}; }
+TWINRAY_REFINE_INLINE glm::dvec3 store(const Vec4& a) { return {a.v[0], a.v[1], a.v[2]}; }
+
+TWINRAY_REFINE_INLINE Vec4 abs(const Vec4& a) {
+  constexpr std::uint64_t kMagnitude = ~std::uint64_t{0} >> 1;
+  return {reinterpret_cast<Vec4d>(reinterpret_cast<Vec4u>(a.v) & Vec4u{kMagnitude, kMagnitude, kMagnitude, kMagnitude})};
 }
+TWINRAY_REFINE_INLINE Vec2d abs(const Vec2d& v) {
+  constexpr std::uint64_t kMagnitude = ~std::uint64_t{0} >> 1;
+  return reinterpret_cast<Vec2d>(reinterpret_cast<Vec2u>(v) & Vec2u{kMagnitude, kMagnitude});
+}
+// (y, z, x) and (z, x, y): a x b = yzx(a) zxy(b) - zxy(a) yzx(b).
+TWINRAY_REFINE_INLINE Vec4 yzx(const Vec4& a) { return {__builtin_shufflevector(a.v, a.v, 1, 2, 0, 3)}; }
+TWINRAY_REFINE_INLINE Vec4 zxy(const Vec4& a) { return {__builtin_shufflevector(a.v, a.v, 2, 0, 1, 3)}; }
+
+// The sums of the components of x, y, z and w, as (sum x, sum y, sum z, sum w): (x0 + x1) + (x2 + x3) with
+// x3 = 0, so each term passes through at most two roundings.
+TWINRAY_REFINE_INLINE Vec4 sums(const Vec4& x, const Vec4& y, const Vec4& z, const Vec4& w) {
+  const Vec4d xy = __builtin_shufflevector(x.v, y.v, 0, 4, 2, 6) + __builtin_shufflevector(x.v, y.v, 1, 5, 3, 7);
+  const Vec4d zw = __builtin_shufflevector(z.v, w.v, 0, 4, 2, 6) + __builtin_shufflevector(z.v, w.v, 1, 5, 3, 7);
+  return {__builtin_shufflevector(xy, zw, 0, 1, 4, 5) + __builtin_shufflevector(xy, zw, 2, 3, 6, 7)};
+}
+
+// The ray in double, with what every refinement of it reuses. Built once per ray.
+struct RefineRay {
+  Vec4 o{{0.0, 0.0, 0.0, 0.0}};
+  Vec4 d{{0.0, 0.0, 1.0, 0.0}};
+  Vec4 abs_d{{0.0, 0.0, 1.0, 0.0}};
+};
 
 // What the bounds of numerator and denominator give for every quotient n^ * r with r = fl(1/d^):
 // |n/d - n^ r| <= (|n^| Ed + |d^| En) w + 3u |n^ r|, scaled for its own rounding (see the header).
 struct Quotient {
-  glm::dvec3 n{0.0}, n_terms{0.0};  // the normal e1 x e2 and its absolute terms
   double r = 0.0;        // fl(1 / den)
   double w = 0.0;        // at least 1 / ((|den| - Ed) |den|) up to a few roundings: r^2 (1 + 2 Ed |r|)
   double abs_den = 0.0;
@@ -96,18 +153,52 @@ struct Quotient {
   }
 };
 
-// den = d.n with its bound; false when its sign is not certain (or Ed |r| > 1/2, where the cheap w would not
-// bound the exact one). 1 / (1 - x) <= 1 + 2x for 0 <= x <= 1/2 gives w without a second division.
-inline bool crossing_denominator(const glm::dvec3& d, const glm::dvec3& p0, const glm::dvec3& p1, const glm::dvec3& p2,
-                                 Quotient& q) {
-  q.n = cross_with_terms(p1 - p0, p2 - p0, q.n_terms);
-  const double den = dot(d, q.n);
-  q.den_err = kSumBound * abs_dot(d, q.n_terms);
-  q.abs_den = std::fabs(den);
+// Everything t and u, v share: the triangle's edges, a = p0 - o, the normal's numerators den = d.n and
+// a.n with their bounds.
+struct Crossing {
+  Vec4 p0, e1, e2, a;
+  Vec4 n;  // e1 x e2
+  Quotient quotient;
+  double num = 0.0, num_err = 0.0;  // a.n and its bound
+};
+
+// e1 x e2 and its absolute terms: (|e1_j e2_k| + |e1_k e2_j|)_i.
+TWINRAY_REFINE_INLINE void cross_with_terms(const Vec4& e1, const Vec4& e2, Vec4& n, Vec4& n_terms) {
+  const Vec4 m1 = yzx(e1) * zxy(e2), m2 = zxy(e1) * yzx(e2);
+  n = m1 - m2;
+  n_terms = abs(m1) + abs(m2);
+}
+
+// Fills `c`; false when den's sign is not certain (or Ed |r| > 1/2, where the cheap w would not bound the
+// exact one). 1 / (1 - x) <= 1 + 2x for 0 <= x <= 1/2 gives w without a second division.
+TWINRAY_REFINE_INLINE bool crossing(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
+                                    Crossing& c) {
+  c.p0 = p0;
+  c.e1 = p1 - p0;
+  c.e2 = p2 - p0;
+  c.a = p0 - ray.o;
+  Vec4 n_terms;
+  cross_with_terms(c.e1, c.e2, c.n, n_terms);
+  // (den, its absolute terms, a.n, its absolute terms)
+  const Vec4 s = sums(ray.d * c.n, ray.abs_d * n_terms, c.a * c.n, abs(c.a) * n_terms);
+  Quotient& q = c.quotient;
+  q.den_err = kSumBound * s.v[1];
+  q.abs_den = std::fabs(s.v[0]);
+  c.num = s.v[2];
+  c.num_err = kSumBound * s.v[3];
   if (!(q.abs_den > 2.0 * q.den_err)) return false;
-  q.r = 1.0 / den;
+  q.r = 1.0 / s.v[0];
   q.w = q.r * q.r * (1.0 + 2.0 * q.den_err * std::fabs(q.r));
   return true;
+}
+
+// normalize(n) rounded to float, (0, 0, 1) for a zero n (collinear vertices, which the edge test never hits):
+// the geometric normal. One function for triangle_geometric_normal and refine_uv's, so both give the same
+// bits.
+inline glm::vec3 unit_normal(double nx, double ny, double nz) {
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
+  return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
 }
 
 // The floats that the ends of [x - err, x + err] round to, the ends widened past their own rounding: every
@@ -119,30 +210,34 @@ struct Ends {
   float lo, hi;
   bool certified() const { return lo == hi && std::fabs(lo) >= 0x1p-125f && std::fabs(lo) <= 0x1.fffffep127f; }
 };
-inline Ends round_ends(double x, double err) {
+TWINRAY_REFINE_INLINE Ends round_ends(double x, double err) {
   const double slack = err + std::fabs(x) * 0x1p-52;  // covers the rounding of x - slack and x + slack
   return {static_cast<float>(x - slack), static_cast<float>(x + slack)};
 }
 
-// q (within err of the exact value) clamped to [0, 1], if certain: 0 and 1 are floats, so clamping after
-// rounding is the same as rounding after clamping. Values that round into the subnormal range go to the
-// exact path, except when the whole interval lies at or below 0 (then 0) or at or above 1 (then 1).
-inline bool certify_barycentric(double q, double err, float& out) {
-  const double slack = err + std::fabs(q) * 0x1p-52;  // as in round_ends
-  const double lo = q - slack, hi = q + slack;
-  if (hi <= 0.0) {
-    out = 0.0f;
-    return true;
-  }
-  if (lo >= 1.0) {
-    out = 1.0f;
-    return true;
-  }
-  const float flo = static_cast<float>(lo), fhi = static_cast<float>(hi);
-  const float clo = flo < 0.0f ? 0.0f : (flo > 1.0f ? 1.0f : flo);
-  const float chi = fhi < 0.0f ? 0.0f : (fhi > 1.0f ? 1.0f : fhi);
-  if (clo != chi || !(clo >= 0x1p-125f)) return false;
-  out = clo;
+// The t interval of a crossing whose den is certain.
+TWINRAY_REFINE_INLINE Ends t_ends(const Crossing& c) {
+  const double q = c.num * c.quotient.r;
+  return round_ends(q, c.quotient.error(c.num, c.num_err, q));
+}
+
+// q (within err of the exact value, per lane: u and v) clamped to [0, 1], if certain: 0 and 1 are floats, so
+// clamping after rounding is the same as rounding after clamping. The ends of the interval are clamped in
+// double and rounded; a lane is certain when both round to the same float and that float is 0 from an
+// interval at or below 0, or normal (a value that rounds into the subnormal range goes to the exact path).
+TWINRAY_REFINE_INLINE bool certify_barycentrics(const Vec2d& q, const Vec2d& err, float& u, float& v) {
+  const Vec2d slack = err + abs(q) * 0x1p-52;  // as in round_ends
+  const Vec2d zero = {0.0, 0.0}, one = {1.0, 1.0};
+  Vec2d lo = q - slack, hi = q + slack;
+  // <= rather than <: an end of -0 becomes +0, the float the exact path returns for u or v clamped to 0.
+  lo = lo <= zero ? zero : (lo > one ? one : lo);
+  hi = hi <= zero ? zero : (hi > one ? one : hi);
+  const float lo_u = static_cast<float>(lo[0]), hi_u = static_cast<float>(hi[0]);
+  const float lo_v = static_cast<float>(lo[1]), hi_v = static_cast<float>(hi[1]);
+  if (!(lo_u == hi_u && (lo_u >= 0x1p-125f || hi[0] == 0.0))) return false;
+  if (!(lo_v == hi_v && (lo_v >= 0x1p-125f || hi[1] == 0.0))) return false;
+  u = lo_u;
+  v = lo_v;
   return true;
 }
 
@@ -153,28 +248,26 @@ inline bool certify_barycentric(double q, double err, float& out) {
 // rounding error of a_k = p0_k - o_k is recovered exactly by TwoSum (Knuth) and added back, so each h_k is
 // within 2u |h_k| + u^2 |a_k| of its exact value; with the remaining roundings (a product, a difference, a
 // product, two additions and e's own) each term passes through at most 8, and the u^2 |a| part adds at most
-// 2^-100 |e|_1 max|a| max|d|.
-inline bool certify_barycentrics(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& p0, const glm::dvec3& e1,
-                                 const glm::dvec3& e2, float t, const Quotient& quotient, float& u, float& v) {
-  const double td = static_cast<double>(t);
-  glm::dvec3 h;
-  double max_a = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double a_k = p0[k] - o[k];
-    const double back = a_k - p0[k];  // TwoSum of p0_k and -o_k: a_k + error is exactly p0_k - o_k
-    const double error = (p0[k] - (a_k - back)) + (-o[k] - back);
-    h[k] = (a_k - td * d[k]) + error;
-    max_a = max2(max_a, std::fabs(a_k));
-  }
-  glm::dvec3 terms;
-  const glm::dvec3 q = cross_with_terms(h, d, terms);
-  const double tiny = 0x1p-100 * max_a * max_abs(d);
-  const double u_num = dot(e2, q), v_num = -dot(e1, q);
-  const double u_err = kSumBound * abs_dot(e2, terms) + tiny * sum_abs(e2);
-  const double v_err = kSumBound * abs_dot(e1, terms) + tiny * sum_abs(e1);
-  const double qu = u_num * quotient.r, qv = v_num * quotient.r;
-  return certify_barycentric(qu, quotient.error(u_num, u_err, qu), u) &&
-         certify_barycentric(qv, quotient.error(v_num, v_err, qv), v);
+// u^2 (1 + 2u) (|a_j| |d_k| + |a_k| |d_j|) to component i of h x d, so 2^-100 |e|.(|a| x' |d|) bounds its
+// share of u_num's error (x' the cross product with both products added: the absolute terms), evaluated with
+// the other absolute terms as one sum (2^-100 / kSumBound is the factor that puts it on their scale).
+TWINRAY_REFINE_INLINE bool certify_barycentrics(const RefineRay& ray, const Crossing& c, float t, float& u, float& v) {
+  const Vec4 back = c.a - c.p0;  // TwoSum of p0_k and -o_k: a_k + error is exactly p0_k - o_k
+  const Vec4 error = (c.p0 - (c.a - back)) + (-ray.o - back);
+  const Vec4 h = (c.a - static_cast<double>(t) * ray.d) + error;
+  const Vec4 m1 = yzx(h) * zxy(ray.d), m2 = zxy(h) * yzx(ray.d);
+  const Vec4 q = m1 - m2;
+  const Vec4 abs_a = abs(c.a);
+  const Vec4 a_terms = yzx(abs_a) * zxy(ray.abs_d) + zxy(abs_a) * yzx(ray.abs_d);
+  const Vec4 terms = (abs(m1) + abs(m2)) + (0x1p-100 / kSumBound) * a_terms;
+  // (e2.q, e1.q, and the absolute terms of their bounds)
+  const Vec4 s = sums(c.e2 * q, c.e1 * q, abs(c.e2) * terms, abs(c.e1) * terms);
+  const Quotient& quotient = c.quotient;
+  const Vec2d num = {s.v[0], -s.v[1]}, num_err = Vec2d{s.v[2], s.v[3]} * kSumBound;
+  const Vec2d uv = num * quotient.r;
+  const Vec2d bound = ((abs(num) * quotient.den_err + quotient.abs_den * num_err) * quotient.w +
+                       (3.0 * kUnit) * abs(uv)) * (1.0 + 0x1p-40);
+  return certify_barycentrics(uv, bound, u, v);
 }
 
 // How many times the exact path was taken, process-wide (for tests and measurements of the fallback rate).
@@ -189,25 +282,26 @@ inline std::atomic<std::uint64_t> exact_fallbacks{0};
   if (!exact::triangle_crossing_attributes({o, d, p0, p1, p2}, t, u, v)) return false;
   return std::isfinite(t);
 }
-
-}  // namespace refine_detail
+// The exact path for vertices given as glm vectors, read again from their memory: the hot path need not
+// keep copies of them alive for it. (A leaf test passes its own, reading its block.)
+template <typename Vec3>
+[[gnu::cold, gnu::noinline]] inline bool exact_crossing_of(const RefineRay& ray, const Vec3& p0, const Vec3& p1,
+                                                           const Vec3& p2, float& t, float& u, float& v) {
+  return exact_crossing(store(ray.o), store(ray.d), glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), t, u, v);
+}
 
 // The crossing parameter of the line o + t d with triangle (p0, p1, p2), which the caller's edge test has
 // accepted: false when there is no crossing (see above) or its correctly rounded t lies outside
-// [tmin, tmax]; otherwise the correctly rounded t. Inputs are doubles holding floats.
-inline bool refine_triangle_t(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& p0, const glm::dvec3& p1,
-                              const glm::dvec3& p2, float tmin, float tmax, float& t_out) {
-  using namespace refine_detail;
-  const glm::dvec3 a = p0 - o;
-  Quotient quotient;
-  const bool den_certain = crossing_denominator(d, p0, p1, p2, quotient);
+// [tmin, tmax]; otherwise the correctly rounded t. Inputs are doubles holding floats; `exact(t, u, v)` is
+// the exact path for the same triangle.
+template <typename Exact>
+TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
+                                      float tmin, float tmax, float& t_out, const Exact& exact) {
+  Crossing c;
   float t = 0.0f;
   bool certain = false;
-  if (den_certain) {
-    const double num = dot(a, quotient.n);
-    const double num_err = kSumBound * abs_dot(a, quotient.n_terms);
-    const double q = num * quotient.r;
-    const Ends ends = round_ends(q, quotient.error(num, num_err, q));
+  if (crossing(ray, p0, p1, p2, c)) {
+    const Ends ends = t_ends(c);
     // Certainly outside: every t within the bound rounds below tmin or above tmax. (Most rejected
     // candidates end here: the triangle a secondary ray starts from, crossings beyond the closest hit.)
     if (ends.hi < tmin || ends.lo > tmax) return false;
@@ -216,25 +310,112 @@ inline bool refine_triangle_t(const glm::dvec3& o, const glm::dvec3& d, const gl
   }
   if (!certain) {
     float u, v;
-    if (!exact_crossing(o, d, p0, p1, p2, t, u, v)) return false;
+    if (!exact(t, u, v)) return false;
   }
   if (!(t >= tmin && t <= tmax)) return false;
   t_out = t;
   return true;
 }
 
+// Whether that correctly rounded t lies in [tmin, tmax], without the t itself (any-hit queries): an
+// interval inside [tmin, tmax] decides, certified or not.
+template <typename Exact>
+TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
+                                                float tmin, float tmax, const Exact& exact) {
+  Crossing c;
+  if (crossing(ray, p0, p1, p2, c)) {
+    const Ends ends = t_ends(c);
+    if (ends.hi < tmin || ends.lo > tmax) return false;
+    // Strictly inside: the rounded t lies between the ends, so in [tmin, tmax]. Strict, because an end
+    // flushed to zero (FTZ) only bounds t up to 2^-126, and a normal tmin or tmax on the other side of a
+    // zero end is at least that far away; and hi < tmax also makes hi, so t, finite.
+    if (ends.lo > tmin && ends.hi < tmax) return true;
+  }
+  float t;
+  return refine_t_v(ray, p0, p1, p2, tmin, tmax, t, exact);
+}
+
 // The barycentrics (u weights p1, v weights p2) of that crossing, correctly rounded after clamping to
-// [0, 1]; `t` is what refine_triangle_t returned for the same inputs. Kept apart so that a closest-hit
-// traversal computes them once, for the winner.
+// [0, 1]; `t` is what refine_t_v returned for the same inputs. Kept apart so that a closest-hit traversal
+// computes them once, for the winner; with its geometric normal when `ng` is given (from the same e1 x e2).
+template <typename Exact>
+TWINRAY_REFINE_INLINE void refine_uv_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2, float t,
+                                       float& u, float& v, glm::vec3* ng, const Exact& exact) {
+  Crossing c;
+  const bool den_certain = crossing(ray, p0, p1, p2, c);
+  if (ng != nullptr) *ng = unit_normal(c.n.v[0], c.n.v[1], c.n.v[2]);
+  if (den_certain && certify_barycentrics(ray, c, t, u, v)) return;
+  float t_exact;
+  exact(t_exact, u, v);
+}
+
+// The entry points, for vertices and rays given as glm vectors of floats (the leaf tests) or of doubles
+// holding floats (the exact backend, tests): the vectors stay inside. `exact` as above; by default
+// exact_crossing_of the same vertices.
+template <typename Vec3>
+TWINRAY_REFINE_INLINE void set_ray(RefineRay& ray, const Vec3& o, const Vec3& d) {
+  ray.o = load(o);
+  ray.d = load(d);
+  ray.abs_d = abs(ray.d);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
+                                    float tmax, float& t, const Exact& exact) {
+  return refine_t_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, exact);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                              float tmin, float tmax, const Exact& exact) {
+  return refine_in_interval_v(ray, load(p0), load(p1), load(p2), tmin, tmax, exact);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE void refine_uv(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float t,
+                                     float& u, float& v, glm::vec3* ng, const Exact& exact) {
+  refine_uv_v(ray, load(p0), load(p1), load(p2), t, u, v, ng, exact);
+}
+template <typename Vec3>
+TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
+                                    float tmax, float& t) {
+  return refine_t(ray, p0, p1, p2, tmin, tmax, t,
+                  [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+template <typename Vec3>
+TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                              float tmin, float tmax) {
+  return refine_in_interval(ray, p0, p1, p2, tmin, tmax,
+                            [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+template <typename Vec3>
+TWINRAY_REFINE_INLINE void refine_uv(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float t,
+                                     float& u, float& v, glm::vec3* ng = nullptr) {
+  refine_uv(ray, p0, p1, p2, t, u, v, ng,
+            [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+// The geometric normal of a triangle: unit_normal of the same e1 x e2 as crossing() computes.
+template <typename Vec3>
+TWINRAY_REFINE_INLINE glm::vec3 geometric_normal(const Vec3& p0, const Vec3& p1, const Vec3& p2) {
+  const Vec4 q0 = load(p0);
+  Vec4 n, n_terms;
+  cross_with_terms(load(p1) - q0, load(p2) - q0, n, n_terms);
+  return unit_normal(n.v[0], n.v[1], n.v[2]);
+}
+
+#undef TWINRAY_REFINE_INLINE
+
+}  // namespace refine_detail
+
+// The same for a ray and a triangle given as doubles holding floats (the exact backend, tests).
+inline bool refine_triangle_t(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& p0, const glm::dvec3& p1,
+                              const glm::dvec3& p2, float tmin, float tmax, float& t_out) {
+  refine_detail::RefineRay ray;
+  refine_detail::set_ray(ray, o, d);
+  return refine_detail::refine_t(ray, p0, p1, p2, tmin, tmax, t_out);
+}
 inline void refine_triangle_uv(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& p0, const glm::dvec3& p1,
                                const glm::dvec3& p2, float t, float& u, float& v) {
-  using namespace refine_detail;
-  Quotient quotient;
-  if (crossing_denominator(d, p0, p1, p2, quotient) &&
-      certify_barycentrics(o, d, p0, p1 - p0, p2 - p0, t, quotient, u, v))
-    return;
-  float t_exact;
-  exact_crossing(o, d, p0, p1, p2, t_exact, u, v);
+  refine_detail::RefineRay ray;
+  refine_detail::set_ray(ray, o, d);
+  refine_detail::refine_uv(ray, p0, p1, p2, t, u, v);
 }
 
 // Both: what a leaf test reports for a candidate its edge test accepted.

@@ -56,7 +56,7 @@ struct TriangleRay {
   int kx = 0, ky = 1, kz = 2;  // permutation: kz = axis of the largest |dir| component (woop_axes.h)
   float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
   float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
-  glm::dvec3 org{0.0}, dir{0.0, 0.0, 1.0};  // the ray itself in double, for the t, u, v of triangle_refine.h
+  refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
 };
 
 inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir) {
@@ -71,20 +71,34 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   r.ox = org[r.kx];
   r.oy = org[r.ky];
   r.oz = org[r.kz];
-  r.org = glm::dvec3(org);
-  r.dir = glm::dvec3(dir);
+  refine_detail::set_ray(r.refine, org, dir);
   return r;
 }
 
 // The refinement of a triangle the edge test accepted (triangle_refine.h), for float vertices: the correctly
-// rounded t when it lies in [tmin, tmax], and the barycentrics of that crossing.
-inline bool refine_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-                              float tmin, float tmax, float& t) {
-  return refine_triangle_t(ray.org, ray.dir, glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), tmin, tmax, t);
+// rounded t when it lies in [tmin, tmax]; only whether it does (any-hit queries); the barycentrics of that
+// crossing. Always inlined into the leaf tests, so that the vector code is compiled for the kernel's
+// instruction set.
+[[gnu::always_inline]] inline bool refine_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1,
+                                                     const glm::vec3& p2, float tmin, float tmax, float& t) {
+  return refine_detail::refine_t(ray.refine, p0, p1, p2, tmin, tmax, t);
 }
-inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-                                  float t, float& u, float& v) {
-  refine_triangle_uv(ray.org, ray.dir, glm::dvec3(p0), glm::dvec3(p1), glm::dvec3(p2), t, u, v);
+[[gnu::always_inline]] inline bool refine_triangle_in_interval(const TriangleRay& ray, const glm::vec3& p0,
+                                                               const glm::vec3& p1, const glm::vec3& p2, float tmin,
+                                                               float tmax) {
+  return refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax);
+}
+// The barycentrics and the geometric normal (triangle_geometric_normal's bits) at once, from one e1 x e2:
+// what a closest-hit traversal asks for its winner.
+[[gnu::always_inline]] inline void triangle_hit_attributes(const TriangleRay& ray, const glm::vec3& p0,
+                                                           const glm::vec3& p1, const glm::vec3& p2, float t,
+                                                           float& u, float& v, glm::vec3& ng) {
+  refine_detail::refine_uv(ray.refine, p0, p1, p2, t, u, v, &ng);
+}
+[[gnu::always_inline]] inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0,
+                                                         const glm::vec3& p1, const glm::vec3& p2, float t, float& u,
+                                                         float& v) {
+  refine_detail::refine_uv(ray.refine, p0, p1, p2, t, u, v);
 }
 
 namespace triangle_detail {
@@ -115,8 +129,12 @@ inline bool owns_edge(float ex, float ey, bool positive) {
   return ey > 0.0f || (ey == 0.0f && ex > 0.0f);
 }
 
-// The watertight edge test, then the refinement: t only, or t, u and v.
-template <bool kBarycentrics>
+// What a triangle test reports for a hit: t, u and v; t only; only that there is one (any-hit queries: the
+// correctly rounded t need not be known when its interval lies inside [tmin, tmax]).
+enum class Report { kHit, kT, kAny };
+
+// The watertight edge test, then the refinement, reporting as above.
+template <Report kReport>
 inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, float tmin,
                       float tmax, float& t_out, float& u_out, float& v_out) {
   using triangle_detail::rounded;
@@ -159,9 +177,13 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
 
   const float det = u + v + w;
   if (det == 0.0f) return false;  // parallel, in-plane or projected to a segment: see conventions above
-  if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, t_out)) return false;
-  if constexpr (kBarycentrics) triangle_barycentrics(ray, p0, p1, p2, t_out, u_out, v_out);
-  return true;
+  if constexpr (kReport == Report::kAny) {
+    return refine_triangle_in_interval(ray, p0, p1, p2, tmin, tmax);
+  } else {
+    if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, t_out)) return false;
+    if constexpr (kReport == Report::kHit) triangle_barycentrics(ray, p0, p1, p2, t_out, u_out, v_out);
+    return true;
+  }
 }
 
 }  // namespace triangle_detail
@@ -170,7 +192,7 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
 // barycentrics (u for p1, v for p2), correctly rounded, and returns true.
 inline bool intersect_triangle(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                float tmin, float tmax, float& t_out, float& u_out, float& v_out) {
-  return triangle_detail::intersect<true>(ray, p0, p1, p2, tmin, tmax, t_out, u_out, v_out);
+  return triangle_detail::intersect<triangle_detail::Report::kHit>(ray, p0, p1, p2, tmin, tmax, t_out, u_out, v_out);
 }
 
 // The same hit decision and t, without the barycentrics: a closest-hit traversal asks
@@ -178,21 +200,24 @@ inline bool intersect_triangle(const TriangleRay& ray, const glm::vec3& p0, cons
 inline bool intersect_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
                                  float tmin, float tmax, float& t_out) {
   float unused_u, unused_v;
-  return triangle_detail::intersect<false>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u, unused_v);
+  return triangle_detail::intersect<triangle_detail::Report::kT>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u,
+                                                                 unused_v);
+}
+
+// Only whether the ray hits the triangle within [tmin, tmax] (any-hit queries).
+inline bool intersect_triangle_any(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1,
+                                   const glm::vec3& p2, float tmin, float tmax) {
+  float unused_t, unused_u, unused_v;
+  return triangle_detail::intersect<triangle_detail::Report::kAny>(ray, p0, p1, p2, tmin, tmax, unused_t, unused_u,
+                                                                   unused_v);
 }
 
 // normalize(cross(p1 - p0, p2 - p0)), evaluated in double so that tiny (but hit) triangles, whose float
 // cross product would underflow, still get a unit normal. A triangle whose vertices are exactly collinear
-// cannot be hit (its determinant is 0), so the fallback only guards against misuse.
+// cannot be hit (its determinant is 0), so the fallback (0, 0, 1) only guards against misuse. The same bits
+// as the normal a closest-hit traversal takes from the winner's kept crossing (triangle_refine.h).
 inline glm::vec3 triangle_geometric_normal(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2) {
-  const double e1x = double(p1.x) - p0.x, e1y = double(p1.y) - p0.y, e1z = double(p1.z) - p0.z;
-  const double e2x = double(p2.x) - p0.x, e2y = double(p2.y) - p0.y, e2z = double(p2.z) - p0.z;
-  const double nx = e1y * e2z - e1z * e2y;
-  const double ny = e1z * e2x - e1x * e2z;
-  const double nz = e1x * e2y - e1y * e2x;
-  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
-  return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
+  return refine_detail::geometric_normal(p0, p1, p2);
 }
 
 }  // namespace twinray
