@@ -125,9 +125,10 @@ struct RangeInfo {
 // thirds of a build's instructions, so one primitive is binned on all three axes with a handful of SSE
 // operations instead of 18 scalar min/max per axis.
 struct BinGrid {
-  // Bit k of used[axis]: bin k holds a primitive. Unused bins are never read, so a grid needs no
-  // initialisation: most nodes are small (a few primitives in 3 x 16 bins), and clearing and sweeping all
-  // bins cost more than binning their primitives.
+  // Bit k of used[axis]: bin k holds a primitive. Unused bins are never read, so a small range's grid needs
+  // no initialisation: most nodes are small (a few primitives in 3 x 16 bins), and clearing and sweeping
+  // all bins cost more than binning their primitives. Large ranges clear the grid instead and bin without
+  // a branch (see bin_range).
   std::uint32_t used[3] = {0, 0, 0};
   __m128 lo[3][kMaxBins], hi[3][kMaxBins];
   std::uint32_t count[3][kMaxBins], second_kind[3][kMaxBins];
@@ -142,11 +143,30 @@ struct BinGrid {
       count[a][k] = n;
       second_kind[a][k] = second;
     } else {
-      lo[a][k] = extend_lo(lo[a][k], box_lo);
-      hi[a][k] = extend_hi(hi[a][k], box_hi);
-      count[a][k] += n;
-      second_kind[a][k] += second;
+      extend(a, k, box_lo, box_hi, n, second);
     }
+  }
+  void extend(int a, int k, __m128 box_lo, __m128 box_hi, std::uint32_t n, std::uint32_t second) {
+    lo[a][k] = extend_lo(lo[a][k], box_lo);
+    hi[a][k] = extend_hi(hi[a][k], box_hi);
+    count[a][k] += n;
+    second_kind[a][k] += second;
+  }
+
+  // Every bin of [0, bins) empty, for extend(); mark_used() afterwards.
+  void clear(int bins) {
+    const __m128 pos = _mm_set1_ps(std::numeric_limits<float>::infinity()), neg = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) {
+        lo[a][k] = pos;
+        hi[a][k] = neg;
+        count[a][k] = 0;
+        second_kind[a][k] = 0;
+      }
+  }
+  void mark_used(int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) used[a] |= count[a][k] != 0 ? 1u << k : 0u;
   }
 
   void merge(const BinGrid& o) {
@@ -157,6 +177,44 @@ struct BinGrid {
       }
   }
 };
+
+// How a range of primitives maps to bins: the bin of each coordinate as Builder::bin_of() computes it.
+// Clamping before the truncation instead of after gives the same index for every finite value (a NaN, from
+// an unusable axis, becomes bin 0: max_ps returns its second operand).
+struct BinMapping {
+  __m128 c_lo, c_scale, top;
+  int bins;
+
+  void bins_of(const PrimRef& r, __m128& lo, __m128& hi, std::int32_t* k) const {
+    lo = r.lo4();
+    hi = r.hi4();
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
+    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
+    _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_cvttps_epi32(x));
+  }
+};
+
+// Bins refs[b, e). kDense: clear the grid first and bin without testing `used` (for large ranges);
+// kSecond: the range holds primitives of the second kind, which are counted (otherwise the counts stay 0).
+template <bool kDense, bool kSecond>
+BinGrid bin_range(std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
+                  std::uint32_t second_kind_begin) {
+  BinGrid g;
+  if constexpr (kDense) g.clear(map.bins);
+  alignas(16) std::int32_t k[4];
+  for (std::size_t i = b; i < e; ++i) {
+    const PrimRef& r = refs[i];
+    __m128 lo, hi;
+    map.bins_of(r, lo, hi, k);
+    const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    for (int axis = 0; axis < 3; ++axis) {
+      if constexpr (kDense) g.extend(axis, k[axis], lo, hi, 1, second);
+      else g.add(axis, k[axis], lo, hi, 1, second);
+    }
+  }
+  if constexpr (kDense) g.mark_used(map.bins);
+  return g;
+}
 
 class Builder {
  public:
@@ -244,7 +302,7 @@ class Builder {
     if (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth || centroids_coincide)
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
 
-    Split best = best_binned_split(begin, end, centroids);
+    Split best = best_binned_split(begin, end, centroids, second_kind);
     if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     // Compare with stopping here: both costs per unit of this node's area.
@@ -264,7 +322,7 @@ class Builder {
   // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
   // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
   // as in leaf_tests.
-  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
+  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids, std::uint32_t second_kind) const {
     const int bins = o_.bins;
     std::array<float, 3> scale{};
     std::array<bool, 3> usable{};
@@ -273,25 +331,18 @@ class Builder {
       scale[static_cast<std::size_t>(axis)] = static_cast<float>(bins) / extent;
       usable[static_cast<std::size_t>(axis)] = extent > 0.0f && std::isfinite(scale[static_cast<std::size_t>(axis)]);
     }
-    // The bin of each coordinate as bin_of() computes it: clamping before the truncation instead of after
-    // gives the same index for every finite value (a NaN, from an unusable axis, becomes bin 0: max_ps
-    // returns its second operand).
-    const __m128 c_lo = _mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f);
-    const __m128 c_scale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
-    const __m128 top = _mm_set1_ps(static_cast<float>(bins - 1)), zero = _mm_setzero_ps(), half = _mm_set1_ps(0.5f);
+    const BinMapping map{_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
+                         _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
     const BinGrid grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
-      BinGrid g;
-      alignas(16) std::int32_t k[4];
-      for (std::size_t i = b; i < e; ++i) {
-        const PrimRef& r = refs_[i];
-        const __m128 lo = r.lo4(), hi = r.hi4();
-        const __m128 c = _mm_mul_ps(half, _mm_add_ps(lo, hi));
-        const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), zero), top);
-        _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_cvttps_epi32(x));
-        const std::uint32_t second = r.id >= second_kind_begin_ ? 1u : 0u;
-        for (int axis = 0; axis < 3; ++axis) g.add(axis, k[axis], lo, hi, 1, second);
+      // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily.
+      constexpr std::size_t kDenseFrom = 32;
+      const std::span<const PrimRef> refs(refs_);
+      if (second_kind == 0) {
+        return e - b >= kDenseFrom ? bin_range<true, false>(refs, b, e, map, second_kind_begin_)
+                                   : bin_range<false, false>(refs, b, e, map, second_kind_begin_);
       }
-      return g;
+      return e - b >= kDenseFrom ? bin_range<true, true>(refs, b, e, map, second_kind_begin_)
+                                 : bin_range<false, true>(refs, b, e, map, second_kind_begin_);
     }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
 
     Split best;
