@@ -194,12 +194,13 @@ struct BinMapping {
   }
 };
 
-// Bins refs[b, e). kDense: clear the grid first and bin without testing `used` (for large ranges);
-// kSecond: the range holds primitives of the second kind, which are counted (otherwise the counts stay 0).
+// Bins refs[b, e) into the unused grid g. kDense: clear the grid first and bin without testing `used` (for
+// large ranges); kSecond: the range holds primitives of the second kind, which are counted (otherwise the
+// counts stay 0). The grid is filled in place: at about 4 KiB, copying it cost more than binning a small
+// range.
 template <bool kDense, bool kSecond>
-BinGrid bin_range(std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
-                  std::uint32_t second_kind_begin) {
-  BinGrid g;
+void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
+               std::uint32_t second_kind_begin) {
   if constexpr (kDense) g.clear(map.bins);
   alignas(16) std::int32_t k[4];
   for (std::size_t i = b; i < e; ++i) {
@@ -213,7 +214,20 @@ BinGrid bin_range(std::span<const PrimRef> refs, std::size_t b, std::size_t e, c
     }
   }
   if constexpr (kDense) g.mark_used(map.bins);
-  return g;
+}
+
+// Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily.
+inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
+                      std::uint32_t second_kind_begin, bool second_kind_present) {
+  constexpr std::size_t kDenseFrom = 32;
+  const bool dense = e - b >= kDenseFrom;
+  if (!second_kind_present) {
+    if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
+    else bin_range<false, false>(g, refs, b, e, map, second_kind_begin);
+  } else {
+    if (dense) bin_range<true, true>(g, refs, b, e, map, second_kind_begin);
+    else bin_range<false, true>(g, refs, b, e, map, second_kind_begin);
+  }
 }
 
 class Builder {
@@ -333,17 +347,17 @@ class Builder {
     }
     const BinMapping map{_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
                          _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
-    const BinGrid grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
-      // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily.
-      constexpr std::size_t kDenseFrom = 32;
-      const std::span<const PrimRef> refs(refs_);
-      if (second_kind == 0) {
-        return e - b >= kDenseFrom ? bin_range<true, false>(refs, b, e, map, second_kind_begin_)
-                                   : bin_range<false, false>(refs, b, e, map, second_kind_begin_);
-      }
-      return e - b >= kDenseFrom ? bin_range<true, true>(refs, b, e, map, second_kind_begin_)
-                                 : bin_range<false, true>(refs, b, e, map, second_kind_begin_);
-    }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
+    const std::span<const PrimRef> refs(refs_);
+    BinGrid grid;
+    if (!o_.parallel || end - begin < kParallelRangeGrain) {
+      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0);
+    } else {
+      grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
+        BinGrid g;
+        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0);
+        return g;
+      }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
+    }
 
     Split best;
     for (int axis = 0; axis < 3; ++axis) {
