@@ -412,10 +412,10 @@ class Builder {
         const float lo = centroids.lo[axis];
         const float scale = static_cast<float>(o_.bins) / (centroids.hi[axis] - lo);
         const int bins = o_.bins;
-        const auto goes_left = [&](const PrimRef& r) { return bin_of(r.centroid()[axis], lo, scale, bins) < split.bin; };
+        // The centroid's coordinate exactly as PrimRef::centroid() computes it.
+        const auto goes_left = [&](const PrimRef& r) { return bin_of(0.5f * (r.lo[axis] + r.hi[axis]), lo, scale, bins) < split.bin; };
         if (end - begin >= kParallelRangeGrain) return partition_in_chunks(begin, end, goes_left, left, right);
-        mid = static_cast<std::size_t>(std::partition(first, last, goes_left) - refs_.data());
-        break;
+        return partition_in_place(begin, end, goes_left, left, right);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
@@ -437,6 +437,27 @@ class Builder {
     left = info_of(begin, mid);
     right = info_of(mid, end);
     return mid;
+  }
+
+  // Hoare partition that describes both sides on the way: every primitive is classified once and folded
+  // into the side it ends on, so a small node needs one pass over its primitives instead of three.
+  template <class Pred>
+  std::size_t partition_in_place(std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
+                                 RangeInfo& right) const {
+    left = RangeInfo{};
+    right = RangeInfo{};
+    PrimRef* lo = refs_.data() + begin;
+    PrimRef* hi = refs_.data() + end;
+    for (;;) {
+      while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin_);
+      while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin_);
+      if (lo == hi) break;
+      // *lo belongs right and hi[-1] left.
+      std::swap(*lo, *--hi);
+      left.add(*lo++, second_kind_begin_);
+      right.add(*hi, second_kind_begin_);
+    }
+    return static_cast<std::size_t>(lo - refs_.data());
   }
 
   template <class Pred>
