@@ -264,10 +264,11 @@ class Builder {
     const std::size_t mid = partition(begin, end, centroids, split, left_info, right_info);
 
     if (o_.parallel && n >= kParallelGrain) {
-      std::vector<BvhNode> left, right;
-      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, left); },
+      // The left subtree goes straight into `out` (only its task appends there meanwhile); the right one is
+      // built apart and copied behind it, rebased. Copying both cost a copy of every node per parallel level.
+      std::vector<BvhNode> right;
+      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, out); },
                            [&] { build(mid, end, right_info, depth + 1, right); });
-      append_rebased(left, out);
       out[node_index].offset = static_cast<std::uint32_t>(out.size());
       append_rebased(right, out);
     } else {
