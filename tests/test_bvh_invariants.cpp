@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <stdexcept>
@@ -155,14 +156,22 @@ TEST(BvhInvariants, TreesAreWellFormed) {
 }
 
 TEST(BvhInvariants, SerialAndParallelBuildsAreIdentical) {
-  const SceneGeometry soup = random_triangle_soup(20000, 5);
-  BvhBuildOptions serial;
-  serial.parallel = false;
-  BvhBackend a(serial), b{BvhBuildOptions{}};
-  a.build(soup);
-  b.build(soup);
-  ASSERT_EQ(a.nodes().size(), b.nodes().size());
-  EXPECT_EQ(0, std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size_bytes()));
+  // 20000: parallel recursion only; 70000: the top nodes also bin (merging per-chunk bin grids) and
+  // partition in parallel chunks, which a serial build does in one pass. The triangles are sorted along x
+  // so that each chunk fills different bins and the merge has to combine them.
+  for (const int triangles : {20000, 70000}) {
+    SceneGeometry soup = random_triangle_soup(triangles, 5);
+    TriangleMesh& mesh = soup.meshes.front();
+    std::sort(mesh.indices.begin(), mesh.indices.end(),
+              [&](const auto& a, const auto& b) { return mesh.positions[a.x].x < mesh.positions[b.x].x; });
+    BvhBuildOptions serial;
+    serial.parallel = false;
+    BvhBackend a(serial), b{BvhBuildOptions{}};
+    a.build(soup);
+    b.build(soup);
+    ASSERT_EQ(a.nodes().size(), b.nodes().size()) << triangles;
+    EXPECT_EQ(0, std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size_bytes())) << triangles;
+  }
 }
 
 TEST(BvhInvariants, SahBuildBeatsObjectMedian) {

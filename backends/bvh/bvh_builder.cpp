@@ -6,9 +6,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -36,17 +40,41 @@ constexpr std::size_t kParallelGrain = 4096;
 constexpr std::size_t kParallelRangeGrain = std::size_t{1} << 15;
 constexpr std::size_t kRangeChunk = std::size_t{1} << 13;
 
-struct PrimRef {
-  Bounds3 box;
-  glm::vec3 centroid;
+// A primitive as the builder moves it: 32 bytes, two SSE loads (lo with the id in its fourth lane, hi with
+// padding). The centroid is recomputed where needed, exactly as Bounds3::center() computes it.
+struct alignas(16) PrimRef {
+  glm::vec3 lo;
   std::uint32_t id;
-};
+  glm::vec3 hi;
+  float pad = 0.0f;
 
-struct Bin {
-  Bounds3 box;
-  std::uint32_t count = 0;
-  std::uint32_t second_kind = 0;  // of `count`, how many are spheres
+  Bounds3 box() const { return Bounds3{lo, hi}; }
+  glm::vec3 centroid() const { return 0.5f * (lo + hi); }
+  __m128 lo4() const { return _mm_load_ps(&lo.x); }  // fourth lane: the id's bits, never used as a float
+  __m128 hi4() const { return _mm_load_ps(&hi.x); }
 };
+static_assert(sizeof(PrimRef) == 32 && offsetof(PrimRef, hi) == 16, "two 16-byte rows");
+
+// SSE min and max with glm's semantics, operand for operand: glm::min(acc, x) is `x < acc ? x : acc`,
+// which is _mm_min_ps(x, acc) (and likewise max), so boxes folded here are bit-identical to Bounds3::extend
+// (signed zeros included) and the tree does not depend on which of the two computed them.
+inline __m128 extend_lo(__m128 acc, __m128 x) { return _mm_min_ps(x, acc); }
+inline __m128 extend_hi(__m128 acc, __m128 x) { return _mm_max_ps(x, acc); }
+
+inline glm::vec3 xyz(__m128 v) {
+  alignas(16) float f[4];
+  _mm_store_ps(f, v);
+  return {f[0], f[1], f[2]};
+}
+
+// Bounds3::half_area() of a box that holds at least one primitive, operation for operation:
+// (e.x e.y + e.y e.z) + e.z e.x.
+inline float half_area(__m128 lo, __m128 hi) {
+  const __m128 e = _mm_sub_ps(hi, lo);
+  const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1)));  // x y, y z, z x
+  return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 1))),
+                                  _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 2))));
+}
 
 // Primitive tests a leaf of `count` primitives costs, `second_kind` of them spheres: triangles are tested
 // four at a time (triangle_block.h), so a leaf of 1..4 triangles costs one test, 5..8 two; spheres one
@@ -66,37 +94,141 @@ struct Split {
 
 // What a node's split decision needs to know about its primitives, gathered by its parent while it
 // partitions (one pass over the primitives per level instead of two).
+// SSE rows, folded like Bounds3::extend (bit-identical, see extend_lo).
 struct RangeInfo {
-  Bounds3 box, centroids;
+  __m128 lo = _mm_set1_ps(std::numeric_limits<float>::infinity()), hi = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  __m128 c_lo = lo, c_hi = hi;    // centroid bounds
   std::uint32_t second_kind = 0;  // how many are of the second kind
 
   void add(const PrimRef& r, std::uint32_t second_kind_begin) {
-    box.extend(r.box);
-    centroids.extend(r.centroid);
+    const __m128 p_lo = r.lo4(), p_hi = r.hi4();
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p_lo, p_hi));
+    lo = extend_lo(lo, p_lo);
+    hi = extend_hi(hi, p_hi);
+    c_lo = extend_lo(c_lo, c);
+    c_hi = extend_hi(c_hi, c);
     second_kind += r.id >= second_kind_begin ? 1u : 0u;
   }
   void merge(const RangeInfo& o) {
-    box.extend(o.box);
-    centroids.extend(o.centroids);
+    lo = extend_lo(lo, o.lo);
+    hi = extend_hi(hi, o.hi);
+    c_lo = extend_lo(c_lo, o.c_lo);
+    c_hi = extend_hi(c_hi, o.c_hi);
     second_kind += o.second_kind;
   }
+  Bounds3 box() const { return {xyz(lo), xyz(hi)}; }
+  Bounds3 centroids() const { return {xyz(c_lo), xyz(c_hi)}; }
 };
 
-// The bins of all three axes, filled in one pass over the primitives.
+// The bins of all three axes, filled in one pass over the primitives: per axis and bin the box (SSE rows,
+// fourth lane unused), the primitive count and how many of them are of the second kind. Binning was two
+// thirds of a build's instructions, so one primitive is binned on all three axes with a handful of SSE
+// operations instead of six scalar min/max per axis (docs/bvh-backend.md has the measurements).
 struct BinGrid {
-  std::array<std::array<Bin, kMaxBins>, 3> bin{};
+  // Bit k of used[axis]: bin k holds a primitive. Unused bins are never read, so a small range's grid needs
+  // no initialisation: most nodes are small (a few primitives in 3 x 16 bins), and clearing and sweeping
+  // all bins cost more than binning their primitives. Large ranges clear the grid instead and bin without
+  // a branch (see bin_range).
+  std::uint32_t used[3] = {0, 0, 0};
+  __m128 lo[3][kMaxBins], hi[3][kMaxBins];
+  std::uint32_t count[3][kMaxBins], second_kind[3][kMaxBins];
 
-  void merge(const BinGrid& o, int bins) {
+  // Adds a box to a bin. A bin's first box is stored as it is, which is what extending the empty box gives.
+  void add(int a, int k, __m128 box_lo, __m128 box_hi, std::uint32_t n, std::uint32_t second) {
+    const std::uint32_t bit = 1u << k;
+    if ((used[a] & bit) == 0) {
+      used[a] |= bit;
+      lo[a][k] = box_lo;
+      hi[a][k] = box_hi;
+      count[a][k] = n;
+      second_kind[a][k] = second;
+    } else {
+      extend(a, k, box_lo, box_hi, n, second);
+    }
+  }
+  void extend(int a, int k, __m128 box_lo, __m128 box_hi, std::uint32_t n, std::uint32_t second) {
+    lo[a][k] = extend_lo(lo[a][k], box_lo);
+    hi[a][k] = extend_hi(hi[a][k], box_hi);
+    count[a][k] += n;
+    second_kind[a][k] += second;
+  }
+
+  // Every bin of [0, bins) empty, for extend(); mark_used() afterwards.
+  void clear(int bins) {
+    const __m128 pos = _mm_set1_ps(std::numeric_limits<float>::infinity()), neg = _mm_set1_ps(-std::numeric_limits<float>::infinity());
     for (int a = 0; a < 3; ++a)
       for (int k = 0; k < bins; ++k) {
-        Bin& b = bin[static_cast<std::size_t>(a)][static_cast<std::size_t>(k)];
-        const Bin& c = o.bin[static_cast<std::size_t>(a)][static_cast<std::size_t>(k)];
-        b.box.extend(c.box);
-        b.count += c.count;
-        b.second_kind += c.second_kind;
+        lo[a][k] = pos;
+        hi[a][k] = neg;
+        count[a][k] = 0;
+        second_kind[a][k] = 0;
+      }
+  }
+  void mark_used(int bins) {
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < bins; ++k) used[a] |= count[a][k] != 0 ? 1u << k : 0u;
+  }
+
+  void merge(const BinGrid& o) {
+    for (int a = 0; a < 3; ++a)
+      for (std::uint32_t m = o.used[a]; m != 0; m &= m - 1) {
+        const int k = __builtin_ctz(m);
+        add(a, k, o.lo[a][k], o.hi[a][k], o.count[a][k], o.second_kind[a][k]);
       }
   }
 };
+
+// How a range of primitives maps to bins: the bin of each coordinate as Builder::bin_of() computes it.
+// Clamping before the truncation instead of after gives the same index for every finite value (a NaN, from
+// an unusable axis, becomes bin 0: max_ps returns its second operand).
+struct BinMapping {
+  __m128 c_lo, c_scale, top;
+  int bins;
+
+  void bins_of(const PrimRef& r, __m128& lo, __m128& hi, std::int32_t* k) const {
+    lo = r.lo4();
+    hi = r.hi4();
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
+    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
+    _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_cvttps_epi32(x));
+  }
+};
+
+// Bins refs[b, e) into the unused grid g. kDense: clear the grid first and bin without testing `used` (for
+// large ranges); kSecond: the range holds primitives of the second kind, which are counted (otherwise the
+// counts stay 0). The grid is filled in place: at about 4 KiB, copying it cost more than binning a small
+// range.
+template <bool kDense, bool kSecond>
+void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
+               std::uint32_t second_kind_begin) {
+  if constexpr (kDense) g.clear(map.bins);
+  alignas(16) std::int32_t k[4];
+  for (std::size_t i = b; i < e; ++i) {
+    const PrimRef& r = refs[i];
+    __m128 lo, hi;
+    map.bins_of(r, lo, hi, k);
+    const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    for (int axis = 0; axis < 3; ++axis) {
+      if constexpr (kDense) g.extend(axis, k[axis], lo, hi, 1, second);
+      else g.add(axis, k[axis], lo, hi, 1, second);
+    }
+  }
+  if constexpr (kDense) g.mark_used(map.bins);
+}
+
+// Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily.
+inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
+                      std::uint32_t second_kind_begin, bool second_kind_present) {
+  constexpr std::size_t kDenseFrom = 32;
+  const bool dense = e - b >= kDenseFrom;
+  if (!second_kind_present) {
+    if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
+    else bin_range<false, false>(g, refs, b, e, map, second_kind_begin);
+  } else {
+    if (dense) bin_range<true, true>(g, refs, b, e, map, second_kind_begin);
+    else bin_range<false, true>(g, refs, b, e, map, second_kind_begin);
+  }
+}
 
 class Builder {
  public:
@@ -120,21 +252,23 @@ class Builder {
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
 
     const std::size_t node_index = out.size();
-    out.push_back(BvhNode{info.box.lo, static_cast<std::uint32_t>(begin), info.box.hi, 0});
+    const Bounds3 box = info.box(), centroids = info.centroids();
+    out.push_back(BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0});
 
-    const Split split = choose_split(begin, end, info.box, info.centroids, depth, mixed, info.second_kind);
+    const Split split = choose_split(begin, end, box, centroids, depth, mixed, info.second_kind);
     if (split.kind == Split::Kind::None) {
       out[node_index].count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
       return;
     }
     RangeInfo left_info, right_info;
-    const std::size_t mid = partition(begin, end, info.centroids, split, left_info, right_info);
+    const std::size_t mid = partition(begin, end, centroids, split, left_info, right_info);
 
     if (o_.parallel && n >= kParallelGrain) {
-      std::vector<BvhNode> left, right;
-      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, left); },
+      // The left subtree goes straight into `out` (only its task appends there meanwhile); the right one is
+      // built apart and copied behind it, rebased. Copying both cost a copy of every node per parallel level.
+      std::vector<BvhNode> right;
+      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, out); },
                            [&] { build(mid, end, right_info, depth + 1, right); });
-      append_rebased(left, out);
       out[node_index].offset = static_cast<std::uint32_t>(out.size());
       append_rebased(right, out);
     } else {
@@ -183,7 +317,7 @@ class Builder {
     if (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth || centroids_coincide)
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
 
-    Split best = best_binned_split(begin, end, centroids);
+    Split best = best_binned_split(begin, end, centroids, second_kind);
     if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     // Compare with stopping here: both costs per unit of this node's area.
@@ -203,7 +337,7 @@ class Builder {
   // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
   // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
   // as in leaf_tests.
-  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
+  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids, std::uint32_t second_kind) const {
     const int bins = o_.bins;
     std::array<float, 3> scale{};
     std::array<bool, 3> usable{};
@@ -212,46 +346,54 @@ class Builder {
       scale[static_cast<std::size_t>(axis)] = static_cast<float>(bins) / extent;
       usable[static_cast<std::size_t>(axis)] = extent > 0.0f && std::isfinite(scale[static_cast<std::size_t>(axis)]);
     }
-    const BinGrid grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
-      BinGrid g;
-      for (std::size_t i = b; i < e; ++i) {
-        const PrimRef& r = refs_[i];
-        const std::uint32_t second = r.id >= second_kind_begin_ ? 1u : 0u;
-        for (std::size_t axis = 0; axis < 3; ++axis) {
-          if (!usable[axis]) continue;
-          Bin& bin = g.bin[axis][static_cast<std::size_t>(bin_of(r.centroid[static_cast<int>(axis)], centroids.lo[static_cast<int>(axis)], scale[axis], bins))];
-          bin.box.extend(r.box);
-          ++bin.count;
-          bin.second_kind += second;
-        }
-      }
-      return g;
-    }, [bins](BinGrid& acc, const BinGrid& part) { acc.merge(part, bins); });
+    const BinMapping map{_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
+                         _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
+    const std::span<const PrimRef> refs(refs_);
+    BinGrid grid;
+    if (!o_.parallel || end - begin < kParallelRangeGrain) {
+      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0);
+    } else {
+      grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
+        BinGrid g;
+        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0);
+        return g;
+      }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
+    }
 
     Split best;
     for (int axis = 0; axis < 3; ++axis) {
       if (!usable[static_cast<std::size_t>(axis)]) continue;
-      const std::array<Bin, kMaxBins>& bin = grid.bin[static_cast<std::size_t>(axis)];
-      // right_cost[k] = area * primitive tests of bins [k, bins)
-      std::array<float, kMaxBins> right_cost{};
-      Bounds3 acc;
+      // Only the planes right after an occupied bin are candidates: with bin k - 1 empty, plane k has the
+      // same sides and cost as plane k - 1, which comes first and so wins the tie (strict <). The sweep
+      // therefore runs over the occupied bins only, with the same folds in the same order as over all.
+      const auto a = static_cast<std::size_t>(axis);
+      int occupied[kMaxBins];
+      int n_occupied = 0;
+      for (std::uint32_t m = grid.used[a]; m != 0; m &= m - 1) occupied[n_occupied++] = __builtin_ctz(m);
+      // right_cost[i] = area * primitive tests of the bins occupied[i..]
+      float right_cost[kMaxBins];
+      __m128 lo = grid.lo[a][occupied[n_occupied - 1]], hi = grid.hi[a][occupied[n_occupied - 1]];
       std::uint32_t count = 0, second = 0;
-      for (int k = bins - 1; k > 0; --k) {
-        acc.extend(bin[static_cast<std::size_t>(k)].box);
-        count += bin[static_cast<std::size_t>(k)].count;
-        second += bin[static_cast<std::size_t>(k)].second_kind;
-        right_cost[static_cast<std::size_t>(k)] = count > 0 ? acc.half_area() * leaf_tests(count, second) : INFINITY;
+      for (int i = n_occupied - 1; i > 0; --i) {
+        const int k = occupied[i];
+        lo = extend_lo(lo, grid.lo[a][k]);
+        hi = extend_hi(hi, grid.hi[a][k]);
+        count += grid.count[a][k];
+        second += grid.second_kind[a][k];
+        right_cost[i] = half_area(lo, hi) * leaf_tests(count, second);
       }
-      acc = Bounds3{};
+      lo = grid.lo[a][occupied[0]];
+      hi = grid.hi[a][occupied[0]];
       count = 0;
       second = 0;
-      for (int k = 1; k < bins; ++k) {
-        acc.extend(bin[static_cast<std::size_t>(k - 1)].box);
-        count += bin[static_cast<std::size_t>(k - 1)].count;
-        second += bin[static_cast<std::size_t>(k - 1)].second_kind;
-        if (count == 0) continue;
-        const float cost = acc.half_area() * leaf_tests(count, second) + right_cost[static_cast<std::size_t>(k)];
-        if (cost < best.cost) best = {Split::Kind::Bin, axis, k, cost};
+      for (int i = 0; i + 1 < n_occupied; ++i) {
+        const int k = occupied[i];
+        lo = extend_lo(lo, grid.lo[a][k]);
+        hi = extend_hi(hi, grid.hi[a][k]);
+        count += grid.count[a][k];
+        second += grid.second_kind[a][k];
+        const float cost = half_area(lo, hi) * leaf_tests(count, second) + right_cost[i + 1];
+        if (cost < best.cost) best = {Split::Kind::Bin, axis, k + 1, cost};
       }
     }
     return best;
@@ -271,10 +413,10 @@ class Builder {
         const float lo = centroids.lo[axis];
         const float scale = static_cast<float>(o_.bins) / (centroids.hi[axis] - lo);
         const int bins = o_.bins;
-        const auto goes_left = [&](const PrimRef& r) { return bin_of(r.centroid[axis], lo, scale, bins) < split.bin; };
+        // The centroid's coordinate exactly as PrimRef::centroid() computes it.
+        const auto goes_left = [&](const PrimRef& r) { return bin_of(0.5f * (r.lo[axis] + r.hi[axis]), lo, scale, bins) < split.bin; };
         if (end - begin >= kParallelRangeGrain) return partition_in_chunks(begin, end, goes_left, left, right);
-        mid = static_cast<std::size_t>(std::partition(first, last, goes_left) - refs_.data());
-        break;
+        return partition_in_place(begin, end, goes_left, left, right);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
@@ -285,7 +427,8 @@ class Builder {
         const int axis = split.axis;
         PrimRef* median = first + (last - first) / 2;
         std::nth_element(first, median, last, [axis](const PrimRef& a, const PrimRef& b) {
-          return a.centroid[axis] != b.centroid[axis] ? a.centroid[axis] < b.centroid[axis] : a.id < b.id;
+          const float ca = a.centroid()[axis], cb = b.centroid()[axis];
+          return ca != cb ? ca < cb : a.id < b.id;
         });
         mid = static_cast<std::size_t>(median - refs_.data());
         break;
@@ -295,6 +438,27 @@ class Builder {
     left = info_of(begin, mid);
     right = info_of(mid, end);
     return mid;
+  }
+
+  // Hoare partition that describes both sides on the way: every primitive is classified once and folded
+  // into the side it ends on, so a small node needs one pass over its primitives instead of three.
+  template <class Pred>
+  std::size_t partition_in_place(std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
+                                 RangeInfo& right) const {
+    left = RangeInfo{};
+    right = RangeInfo{};
+    PrimRef* lo = refs_.data() + begin;
+    PrimRef* hi = refs_.data() + end;
+    for (;;) {
+      while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin_);
+      while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin_);
+      if (lo == hi) break;
+      // *lo belongs right and hi[-1] left.
+      std::swap(*lo, *--hi);
+      left.add(*lo++, second_kind_begin_);
+      right.add(*hi, second_kind_begin_);
+    }
+    return static_cast<std::size_t>(lo - refs_.data());
   }
 
   template <class Pred>
@@ -381,7 +545,7 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   if (bounds.empty()) return tree;
   std::vector<PrimRef> refs(bounds.size());
   const auto make_refs = [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) refs[i] = {bounds[i], bounds[i].center(), static_cast<std::uint32_t>(i)};
+    for (std::size_t i = b; i < e; ++i) refs[i] = PrimRef{bounds[i].lo, static_cast<std::uint32_t>(i), bounds[i].hi};
   };
   if (options.parallel && refs.size() >= kParallelRangeGrain)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refs.size(), kRangeChunk),

@@ -63,25 +63,22 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
     stack[size++] = StackEntry{node.child[far], entry[far]};
     return node.child[near];
   }
-  // Three or more: keys pack the entry's bits above the slot. Entries are >= tmin >= 0, whose bit patterns
-  // order like their values (a -0 entry sorts last, which only changes the order, never the answer).
-  std::uint64_t keys[kWideWidth];
-  int n = 0;
+  // Three or more: the nearest is visited now and the second nearest pushed last, so that it is the next
+  // popped; the others go below it in slot order. A full sort costs more than it saves (docs/bvh-backend.md).
   mask |= (1u << a) | (1u << b);
-  for (; mask != 0; mask &= mask - 1) {
-    const unsigned s = static_cast<unsigned>(__builtin_ctz(mask));
-    std::uint32_t bits;
-    std::memcpy(&bits, &entry[s], sizeof bits);
-    const std::uint64_t key = (std::uint64_t{bits} << 32) | s;
-    int k = n++;  // insertion into descending order
-    for (; k > 0 && keys[k - 1] < key; --k) keys[k] = keys[k - 1];
-    keys[k] = key;
+  unsigned near = a, second = b;
+  if (entry[b] < entry[a]) near = b, second = a;
+  for (unsigned m = mask & ~((1u << a) | (1u << b)); m != 0; m &= m - 1) {
+    const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
+    if (entry[s] < entry[near]) second = near, near = s;
+    else if (entry[s] < entry[second]) second = s;
   }
-  for (int k = 0; k < n - 1; ++k) {
-    const auto s = static_cast<unsigned>(keys[k] & 7u);
+  for (unsigned m = mask & ~((1u << near) | (1u << second)); m != 0; m &= m - 1) {
+    const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
     stack[size++] = StackEntry{node.child[s], entry[s]};
   }
-  return node.child[keys[n - 1] & 7u];
+  stack[size++] = StackEntry{node.child[second], entry[second]};
+  return node.child[near];
 }
 
 }  // namespace wide_detail
