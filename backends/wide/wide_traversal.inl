@@ -161,10 +161,8 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    const glm::vec3 p0 = prims.triangle_vertex(best_index, 0), p1 = prims.triangle_vertex(best_index, 1),
-                    p2 = prims.triangle_vertex(best_index, 2);
-    triangle_barycentrics(tri_ray, p0, p1, p2, hit.t, hit.u, hit.v);
-    hit.ng = triangle_geometric_normal(p0, p1, p2);
+    triangle_block_hit_attributes(tri_ray, prims.triangle_blocks[best_index / kTriangleBlockLanes],
+                                  best_index % kTriangleBlockLanes, hit.t, hit.u, hit.v, hit.ng);
   }
   return true;
 }
@@ -180,9 +178,9 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
     for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
       const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
       prims_tested += in_block;
-      BlockHits unused;
-      if (intersect_triangle_block_t(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                     lane_mask(in_block), ray.tmin, ray.tmax, unused) != 0)
+      // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
+      if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
+                                       lane_mask(in_block), ray.tmin, ray.tmax) != 0)
         return true;
     }
   } else if constexpr (kSpheres) {
