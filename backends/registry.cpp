@@ -3,6 +3,7 @@
 #include "backends/brute/brute_backend.h"
 #include "backends/bvh/bvh_backend.h"
 #include "backends/embree/embree_backend.h"
+#include "backends/exact/exact_backend.h"
 #include "backends/plugin/isolated_plugin_backend.h"
 #include "backends/plugin/plugin_backend.h"
 #include "backends/wide/wide_backend.h"
@@ -27,7 +28,7 @@ bool is_plugin_name(std::string_view name) {
 }
 }  // namespace
 
-std::vector<std::string> backend_names() { return {"bvh8", "bvh", "embree", "embree-fast", "brute"}; }
+std::vector<std::string> backend_names() { return {"bvh8", "bvh", "embree", "embree-fast", "brute", "exact"}; }
 
 std::unique_ptr<Backend> make_backend(std::string_view name) {
   if (name == "bvh8") return make_wide_backend();
@@ -35,6 +36,7 @@ std::unique_ptr<Backend> make_backend(std::string_view name) {
   if (name == "embree") return make_embree_backend(/*robust=*/true);
   if (name == "embree-fast") return make_embree_backend(/*robust=*/false);
   if (name == "brute") return make_brute_backend();
+  if (name == "exact") return make_exact_backend();
   if (name.starts_with(kPluginPrefix))
     return make_isolated_plugin_backend(std::string(name.substr(kPluginPrefix.size())));
   if (name.starts_with(kInProcessPluginPrefix))

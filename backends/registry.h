@@ -6,6 +6,7 @@
 //   embree        Embree 3, RTC_SCENE_FLAG_ROBUST: the correctness reference
 //   embree-fast   Embree 3, default flags: the speed reference
 //   brute         a loop over every primitive: the oracle
+//   exact         exact arithmetic (GMP/MPFR): the true closest hit, correctly rounded; the arbiter's reference
 //   plugin:PATH   an external BVH loaded from a shared library through the C ABI (backends/plugin), run in
 //                 an isolated, sandboxed worker process: a crash or hang of the plugin is a PluginFailure
 //   plugin-inprocess:PATH  the same, loaded into this process (trusted plugins, debugging)

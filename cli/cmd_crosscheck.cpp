@@ -22,6 +22,8 @@ struct CrosscheckOptions {
   std::string kinds = "camera,uniform,diffuse,shadow";
   std::uint64_t seed = 1;
   std::string json;
+  bool no_arbiter = false;
+  std::int64_t arbiter_max_rays = 100000;  // signed for the same reason as rays
 };
 
 int run_crosscheck_command(const CrosscheckOptions& opt) {
@@ -43,6 +45,11 @@ int run_crosscheck_command(const CrosscheckOptions& opt) {
     return report_bad_input("crosscheck", fmt::format("--rays must be between 1 and {}, got {}", kMaxRays, opt.rays));
   }
   settings.rays_per_kind = static_cast<std::size_t>(opt.rays);
+  if (opt.arbiter_max_rays < 0) {
+    return report_bad_input("crosscheck", fmt::format("--arbiter-max-rays must be at least 0, got {}", opt.arbiter_max_rays));
+  }
+  settings.arbitrate = !opt.no_arbiter;
+  settings.arbiter_max_rays = static_cast<std::size_t>(opt.arbiter_max_rays);
 
   const crosscheck::CrosscheckReport report = crosscheck::run_crosscheck(settings);
   fmt::print("{}", report.text);
@@ -56,17 +63,23 @@ void add_crosscheck_command(CLI::App& app, CommandRunner& run) {
   auto opt = std::make_shared<CrosscheckOptions>();
   CLI::App* cmd = app.add_subcommand(
       "crosscheck",
-      "Trace the same rays through several backends and classify every disagreement.\n"
-      "Exit code: 0 no genuine mismatch, 1 at least one genuine mismatch, 2 bad input.");
+      "Trace the same rays through several backends, classify every disagreement, and rule each one against\n"
+      "the exact backend (who is right, and why).\n"
+      "Exit code: 0 no genuine mismatch, 1 at least one genuine mismatch, 2 bad input. The arbiter's rulings are\n"
+      "reported, not part of the exit code.");
   cmd->add_option("scene", opt->scene, "Scene (.json) or bare mesh (.obj, .ply)")->required();
   cmd->add_option("--backends", opt->backends,
                   "Comma-separated backends; the first is the baseline the others are compared with "
-                  "(bvh8, bvh, embree, embree-fast, brute, plugin:PATH)")
+                  "(bvh8, bvh, embree, embree-fast, brute, exact, plugin:PATH)")
       ->capture_default_str();
   cmd->add_option("--rays", opt->rays, "Rays per kind")->capture_default_str();
   cmd->add_option("--kinds", opt->kinds, "Ray kinds: camera, uniform, diffuse, shadow")->capture_default_str();
   cmd->add_option("--seed", opt->seed, "Random seed for ray generation")->capture_default_str();
   cmd->add_option("--json", opt->json, "Write the figures as JSON to this file");
+  cmd->add_flag("--no-arbiter", opt->no_arbiter, "Do not rule disagreements against the exact backend");
+  cmd->add_option("--arbiter-max-rays", opt->arbiter_max_rays,
+                  "Rule at most this many disputed rays per kind (the first ones); 0 rules none")
+      ->capture_default_str();
   cmd->callback([opt, &run] { run = [opt] { return run_crosscheck_command(*opt); }; });
 }
 

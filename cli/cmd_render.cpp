@@ -253,7 +253,7 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   auto opt = std::make_shared<RenderCommandOptions>();
   CLI::App* cmd = app.add_subcommand("render", "Render a scene to a linear EXR and/or an sRGB PNG (docs/rendering.md).");
   cmd->add_option("scene", opt->scene, "Scene (.json) or bare mesh (.obj, .ply)")->required();
-  cmd->add_option("--backend", opt->backend, "Intersection backend (bvh8, bvh, embree, embree-fast, brute, plugin:PATH)")
+  cmd->add_option("--backend", opt->backend, "Intersection backend (bvh8, bvh, embree, embree-fast, brute, exact, plugin:PATH)")
       ->capture_default_str();
   cmd->add_option("--integrator", opt->integrator, "direct or path")->capture_default_str();
   cmd->add_option("--strategy", opt->strategy, "mis (default), bsdf (BSDF sampling only), light (light sampling only)")

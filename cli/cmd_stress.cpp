@@ -18,7 +18,7 @@ namespace twinray::cli {
 namespace {
 
 struct StressCommandOptions {
-  std::string backends = "bvh8,bvh,brute,embree,embree-fast";
+  std::string backends = "bvh8,bvh,brute,exact,embree,embree-fast";
   std::vector<std::string> cases;
   std::string json;
   double effort = 1.0;
@@ -70,7 +70,7 @@ void add_stress_command(CLI::App& app, CommandRunner& run) {
       "stress",
       "Run the catalogue of numerically hard cases (docs/stress.md) on several backends.\n"
       "Exit code: 0 every required case passed, 1 a required case failed, 2 bad input.");
-  cmd->add_option("--backends", opt->backends, "Comma-separated backends (bvh8, bvh, embree, embree-fast, brute, plugin:PATH)")
+  cmd->add_option("--backends", opt->backends, "Comma-separated backends (bvh8, bvh, embree, embree-fast, brute, exact, plugin:PATH)")
       ->capture_default_str();
   cmd->add_option("--case", opt->cases, "Run only this case (repeatable); see --list");
   cmd->add_option("--json", opt->json, "Write every outcome with its figures as JSON to this file");

@@ -32,5 +32,7 @@ void add_converge_command(CLI::App& app, CommandRunner& run);
 void add_report_command(CLI::App& app, CommandRunner& run);
 void add_export_command(CLI::App& app, CommandRunner& run);
 void add_compare_command(CLI::App& app, CommandRunner& run);
+void add_trace_command(CLI::App& app, CommandRunner& run);
+void add_grade_command(CLI::App& app, CommandRunner& run);
 
 }  // namespace twinray::cli

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   add_report_command(app, run);
   add_export_command(app, run);
   add_compare_command(app, run);
+  add_trace_command(app, run);
+  add_grade_command(app, run);
 
   try {
     app.parse(argc, argv);

@@ -18,6 +18,10 @@ PACKAGES=(
   libfmt-dev
   libpugixml-dev         # XML: Mitsuba 3 scenes (twinray export, .xml scenes)
   libseccomp-dev         # the plugin worker's system-call sandbox (backends/plugin/worker)
+  libgmp-dev             # exact rational arithmetic (GMP, gmpxx): the exact backend and the arbiter
+  libmpfr-dev            # correctly rounded conversion of exact values to float (MPFR)
+  libxml2-utils          # xmllint: the tests validate twinray grade's JUnit XML against an XSD
+  python3-jsonschema     # the tests validate twinray grade's Gradescope results.json against a JSON schema
 )
 
 missing=()

@@ -14,10 +14,9 @@ struct CommandResult {
   std::string output;  // stdout and stderr, interleaved
 };
 
-// `wrapper` runs before the binary, e.g. "setpriv --reuid=65534 " to run it as another user.
-inline CommandResult run_twinray(const std::string& args, const std::string& wrapper = "") {
-  std::string command = "CI=true ";
-  command.append(wrapper).append("'").append(TWINRAY_BINARY).append("' ").append(args).append(" 2>&1");
+// Any shell command line (sh -c), stdout and stderr captured together.
+inline CommandResult run_command(const std::string& command_line) {
+  const std::string command = command_line + " 2>&1";
   CommandResult result;
   std::FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return result;
@@ -27,6 +26,13 @@ inline CommandResult run_twinray(const std::string& args, const std::string& wra
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   return result;
+}
+
+// `wrapper` runs before the binary, e.g. "setpriv --reuid=65534 " to run it as another user.
+inline CommandResult run_twinray(const std::string& args, const std::string& wrapper = "") {
+  std::string command = "CI=true ";
+  command.append(wrapper).append("'").append(TWINRAY_BINARY).append("' ").append(args);
+  return run_command(command);
 }
 
 inline std::filesystem::path source_path(const std::string& relative) {

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -188,6 +189,53 @@ TEST(BvhVsBrute, DuplicatedGeometryResolvesTiesByLowestIds) {
     if (bvh->intersect(ray, hit)) {
       EXPECT_TRUE(hit.geom_id == 0 || hit.geom_id == 1) << hit.geom_id;
     }
+  }
+}
+
+// Overlapping triangles in one plane z = 0.3 (not a dyadic number), one per leaf: every crossing is a tie
+// between triangles in different leaves, whose flat boxes the ray enters exactly at the tie's t. The box's
+// computed entry may exceed the correctly rounded t by an ulp or two; the traversal must still visit the box,
+// or the tie goes to whichever triangle it found first (issue 11, found by the arbiter on Sponza's floor).
+TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
+  SceneGeometry g;
+  TriangleMesh mesh;
+  Rng rng(12, 0);
+  for (int k = 0; k < 400; ++k) {
+    const glm::vec3 c(2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f, 0.3f);
+    const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+    mesh.positions.push_back(c + glm::vec3(-0.6f * rng.next_float() - 0.2f, -0.3f, 0.0f));
+    mesh.positions.push_back(c + glm::vec3(0.6f * rng.next_float() + 0.2f, -0.3f, 0.0f));
+    mesh.positions.push_back(c + glm::vec3(0.0f, 0.6f * rng.next_float() + 0.2f, 0.0f));
+    mesh.indices.push_back({first, first + 1, first + 2});
+  }
+  mesh.positions.reserve(mesh.positions.size() + 1);
+  g.meshes.push_back(mesh);
+  // One triangle per leaf in both trees, so the coplanar triangles sit in flat boxes of their own.
+  BvhBuildOptions one_per_leaf;
+  one_per_leaf.max_leaf_size = 1;
+  WideBuildOptions wide_one_per_leaf;
+  wide_one_per_leaf.binary.max_leaf_size = 1;
+  wide_one_per_leaf.collapse.max_leaf_size = 1;
+  std::vector<std::unique_ptr<Backend>> trees;
+  trees.push_back(std::make_unique<BvhBackend>(one_per_leaf));
+  trees.push_back(std::make_unique<WideBackend>(wide_one_per_leaf));
+  const std::unique_ptr<Backend> brute = make_brute_backend();
+  brute->build(g);
+  for (const std::unique_ptr<Backend>& tree : trees) {
+    tree->build(g);
+    Rng rays(13, 0);
+    std::size_t hits = 0, differ = 0;
+    for (int i = 0; i < 4000; ++i) {
+      Ray ray;
+      ray.org = {2.0f * rays.next_float() - 1.0f, 2.0f * rays.next_float() - 1.0f, 1.0f + rays.next_float()};
+      ray.dir = {0.7f * rays.next_float() - 0.35f, 0.7f * rays.next_float() - 0.35f, -0.5f - rays.next_float()};
+      Hit a, b;
+      hits += brute->intersect(ray, a) ? 1 : 0;
+      tree->intersect(ray, b);
+      differ += (a.prim_id != b.prim_id || !same_bits(a.t, b.t)) ? 1 : 0;
+    }
+    EXPECT_GT(hits, 2000u) << tree->name();
+    EXPECT_EQ(differ, 0u) << tree->name();
   }
 }
 

@@ -82,6 +82,45 @@ TEST(CliContract, CrosscheckPassesOnBundledScenesWithJsonKeys) {
   }
 }
 
+// Every disagreement is ruled against the exact backend: per backend ruled / wrong / max_t_rel_error, the
+// reasons and the first wrong answers; bvh and exact are never wrong.
+TEST(CliContract, CrosscheckRulesDisagreementsWithTheArbiter) {
+  const auto dir = scratch_dir("crosscheck-arbiter");
+  const auto json = dir / "cc.json";
+  const CommandResult r = run_twinray("crosscheck " + quoted(source_path("scenes/cornell-box.json")) +
+                                      " --backends bvh,embree-fast,exact --rays 2000 --json " + quoted(json));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("arbiter (exact)"), std::string::npos) << r.output;
+  const nlohmann::json j = read_json(json);
+  ASSERT_TRUE(j.contains("arbiter"));
+  for (const char* name : {"bvh", "embree-fast", "exact"}) {
+    const auto& a = j.at("arbiter").at(name);
+    EXPECT_GE(a.at("ruled").get<int>(), a.at("wrong").get<int>()) << name;
+    EXPECT_GE(a.at("max_t_rel_error").get<double>(), 0.0) << name;
+    EXPECT_TRUE(a.at("reasons").is_object()) << name;
+    EXPECT_TRUE(a.at("reasons").contains("t-off")) << name;
+    EXPECT_TRUE(a.at("wrong_examples").is_array()) << name;
+    for (const auto& [kind, k] : j.at("kinds").items()) EXPECT_TRUE(k.at("arbiter").contains(name)) << kind;
+  }
+  EXPECT_EQ(j.at("arbiter").at("bvh").at("wrong"), 0);
+  EXPECT_EQ(j.at("arbiter").at("exact").at("wrong"), 0);
+  EXPECT_EQ(j.at("arbiter_settings").at("enabled"), true);
+  EXPECT_EQ(j.at("arbiter_settings").at("max_rays_per_kind"), 100000);
+  // bvh reports the exact t: it agrees with the exact backend on every ray of the bundled scene.
+  for (const auto& [kind, k] : j.at("kinds").items())
+    for (const auto& c : k.at("comparisons"))
+      if (c.at("backend") == "exact") {
+        EXPECT_EQ(c.at("max_rel_t_diff"), 0.0) << kind;
+      }
+
+  const CommandResult off = run_twinray("crosscheck " + quoted(source_path("scenes/cornell-box.json")) +
+                                        " --backends bvh,embree-fast --rays 500 --no-arbiter --json " + quoted(json));
+  ASSERT_EQ(off.exit_code, 0) << off.output;
+  const nlohmann::json j_off = read_json(json);
+  EXPECT_FALSE(j_off.contains("arbiter"));
+  EXPECT_EQ(j_off.at("arbiter_settings").at("enabled"), false);
+}
+
 TEST(CliContract, CrosscheckAcceptsBareMesh) {
   const auto dir = scratch_dir("bare-mesh");
   {
@@ -116,6 +155,7 @@ TEST(CliContract, BadInputExitsTwoWithMessageAndNoOutput) {
       {"unknown kind", "crosscheck " + cornell + " --kinds camera,laser --json " + json_out, "laser"},
       {"zero rays", "crosscheck " + cornell + " --rays 0 --json " + json_out, "--rays"},
       {"negative rays", "crosscheck " + cornell + " --rays -5 --json " + json_out, "rays"},
+      {"negative arbiter cap", "crosscheck " + cornell + " --arbiter-max-rays -1 --json " + json_out, "--arbiter-max-rays"},
       {"unknown flag", "crosscheck " + cornell + " --frobnicate", "frobnicate"},
       {"missing plugin", "crosscheck " + cornell + " --backends bvh,plugin:/nonexistent/libx.so --json " + json_out,
        "libx.so"},
@@ -159,6 +199,18 @@ TEST(CliContract, CrosscheckExitsOneOnGenuineMismatch) {
   EXPECT_GT(j.at("genuine_mismatches").get<int>(), 0);
   EXPECT_EQ(j.at("verdict"), "fail");
   EXPECT_LT(j.at("identical_fraction").get<double>(), 1.0);
+  // The arbiter says who is right: the plugin's lost triangles are missed hits; the oracle is never wrong.
+  const std::string plugin = std::string("plugin:") + TWINRAY_TEST_BUGGY_PLUGIN;
+  EXPECT_GT(j.at("arbiter").at(plugin).at("wrong").get<int>(), 0);
+  EXPECT_GT(j.at("arbiter").at(plugin).at("reasons").at("missed-hit").get<int>(), 0);
+  EXPECT_EQ(j.at("arbiter").at("brute").at("wrong").get<int>(), 0);
+  ASSERT_FALSE(j.at("arbiter").at(plugin).at("wrong_examples").empty());
+  const auto& example = j.at("arbiter").at(plugin).at("wrong_examples").at(0);
+  EXPECT_EQ(example.at("reason"), "missed-hit");
+  EXPECT_TRUE(example.at("answer").is_null());
+  EXPECT_TRUE(example.at("exact").is_object());
+  EXPECT_NE(example.at("ray").at("hex").get<std::string>().find("0x"), std::string::npos);
+  EXPECT_NE(r.output.find("bits: org (0x"), std::string::npos) << r.output;
 }
 
 // The correct build of the same plugin passes against the built-in oracle.

@@ -34,11 +34,18 @@ struct Param {
 };
 std::ostream& operator<<(std::ostream& os, const Param& p) { return os << p.case_name << "/" << p.backend; }
 
+// Cases a backend is run on but not required to pass (the reason is the case's note): Embree computes t in
+// float, beyond the arbiter's tolerance at 1e-4 degree grazing angles (docs/stress.md).
+const std::set<std::pair<std::string, std::string>> kReportedOnly = {{"grazing-slivers", "embree"}};
+
+// Every case on bvh8, bvh, brute and embree; the exact backend on every case but the renders (which it skips).
 std::vector<Param> params() {
   std::vector<Param> out;
-  for (const StressCase& c : all_cases())
+  for (const StressCase& c : all_cases()) {
     for (const char* b : {"bvh8", "bvh", "brute", "embree"})
       if (!kOpenFindings.count({c.name, b})) out.push_back({c.name, b});
+    if (c.family != "light-transport") out.push_back({c.name, "exact"});
+  }
   return out;
 }
 
@@ -49,8 +56,21 @@ TEST_P(StressCatalogue, PassesOnBackendsThatClaimIt) {
   const StressCase* c = find_case(GetParam().case_name);
   ASSERT_NE(c, nullptr);
   const Outcome o = c->run(GetParam().backend, StressOptions{kTestEffort});
+  if (kReportedOnly.count({GetParam().case_name, GetParam().backend})) {
+    EXPECT_FALSE(o.required) << o.figures;
+    EXPECT_FALSE(o.counts_as_failure());
+    return;
+  }
   EXPECT_TRUE(o.required) << o.note;
   EXPECT_EQ(o.status, Status::Pass) << o.figures << "\n" << o.note << "\n" << o.json.dump(1);
+}
+
+// The exact backend is an arbiter for single rays: the light-transport renders skip it, and say so.
+TEST(StressCatalogue, RendersSkipTheExactBackend) {
+  const Outcome o = find_case("lt-furnace-long-paths")->run("exact", StressOptions{kTestEffort});
+  EXPECT_EQ(o.status, Status::Skip);
+  EXPECT_FALSE(o.counts_as_failure());
+  EXPECT_NE(o.note.find("exact"), std::string::npos);
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, StressCatalogue, ::testing::ValuesIn(params()),

@@ -1,6 +1,6 @@
 #pragma once
 // The hand-written BVH backend: binned SAH tree (bvh_builder.h) over a leaf-ordered private copy of the
-// geometry (primitive_store.h), traversed by bvh_traversal.h. name() == "bvh".
+// geometry (primitive_store.h), traversed by bvh_traversal.inl (bvh_kernels.h). name() == "bvh".
 
 #include "backends/bvh/bvh_build_options.h"
 #include "backends/bvh/bvh_kernels.h"
@@ -8,12 +8,19 @@
 #include "backends/bvh/primitive_store.h"
 #include "core/backend/backend.h"
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <span>
 #include <vector>
 
 namespace twinray {
+
+// One node entered by a traced query (see BvhBackend::intersect_traced).
+struct BvhVisit {
+  std::uint32_t node;  // index into nodes()
+  float tmax;          // end of the interval still searched when the node was entered
+};
 
 class BvhBackend final : public Backend {
  public:
@@ -33,6 +40,11 @@ class BvhBackend final : public Backend {
   // single-ray calls, fewer cache misses on incoherent rays.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const override;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats = nullptr) const override;
+
+  // The same queries (same code, same answers) that also record every node entered, in order: the visit
+  // order `twinray trace` prints. Not for hot paths: they allocate.
+  bool intersect_traced(const Ray& ray, Hit& hit, std::vector<BvhVisit>& visits, QueryStats* stats = nullptr) const;
+  bool occluded_traced(const Ray& ray, std::vector<BvhVisit>& visits, QueryStats* stats = nullptr) const;
 
   // Read-only access to the tree, for tests and tools.
   const BvhBuildOptions& options() const { return options_; }

@@ -13,6 +13,13 @@
 // headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
 // child-pair box test of ray_box.h) defined. See bvh_kernels.h.
 
+// Told about every node a query enters, in order, with the end of the interval still searched (the closest
+// hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
+// compiles away, so the production traversal carries no trace of it.
+struct NoVisitObserver {
+  void enter(std::uint32_t /*node*/, float /*tmax*/) const {}
+};
+
 namespace bvh_detail {
 
 struct StackEntry {
@@ -24,6 +31,7 @@ struct StackEntry {
 TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
   return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
 }
+
 
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
 TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
@@ -60,8 +68,12 @@ TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t
 }  // namespace bvh_detail
 
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+// Always inlined into its one caller per instantiation (the kernel below, or a traced query), so that the
+// kernels compile to the code they had before observers existed.
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed(const BvhView& bvh, const Ray& ray,
+                                                                                Hit& hit, QueryStats* stats,
+                                                                                const Observer& observer) {
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
@@ -78,13 +90,16 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
+  const float box_tmin = cull_min(ray.tmin);
+  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, cull_max(tmax), root_entry);
   while (more) {
+    observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, ray.tmin, tmax, stack, size, index) ||
-             pop_next(stack, size, tmax, index);
+      const float box_tmax = cull_max(tmax);
+      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
+             pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -92,15 +107,14 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
       for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
         BlockHits found;
-        unsigned hits = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
-                                                 ray.tmin, tmax, found);
+        // t only: the winner's u, v are computed once, at the end.
+        unsigned hits = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
+                                                   ray.tmin, tmax, found);
         for (; hits != 0; hits &= hits - 1) {
           const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
           const PrimitiveKey key = prims.triangle_keys[slot + lane];
           if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
           hit.t = tmax = found.t[lane];
-          hit.u = found.u[lane];
-          hit.v = found.v[lane];
           hit.geom_id = key.geom_id;
           hit.prim_id = key.prim_id;
           best_is_sphere = false;
@@ -121,7 +135,7 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
         best_index = i;
       }
     }
-    more = pop_next(stack, size, tmax, index);
+    more = pop_next(stack, size, cull_max(tmax), index);
   }
 
   if (stats) {
@@ -133,15 +147,19 @@ TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, 
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
-                                       prims.triangle_vertex(best_index, 2));
+    const glm::vec3 p0 = prims.triangle_vertex(best_index, 0), p1 = prims.triangle_vertex(best_index, 1),
+                    p2 = prims.triangle_vertex(best_index, 2);
+    triangle_barycentrics(tri_ray, p0, p1, p2, hit.t, hit.u, hit.v);
+    hit.ng = triangle_geometric_normal(p0, p1, p2);
   }
   return true;
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+template <bool kTriangles, bool kSpheres, typename Observer>
+TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(const BvhView& bvh, const Ray& ray,
+                                                                               QueryStats* stats,
+                                                                               const Observer& observer) {
   using namespace bvh_detail;
   if (bvh.nodes.empty()) return false;
   const BoxRay box_ray(ray);
@@ -155,13 +173,15 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  bool more = intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
+  const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
+  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   while (more && !found) {
+    observer.enter(index, ray.tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, ray.tmin, ray.tmax, stack, size, index) ||
-             pop_next(stack, size, ray.tmax, index);
+      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
+             pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -170,8 +190,8 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
         BlockHits unused;
-        found = intersect_triangle_block(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
-                                         unused) != 0;
+        found = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax,
+                                           unused) != 0;
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {
@@ -181,7 +201,7 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
         found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
       }
     }
-    more = pop_next(stack, size, ray.tmax, index);
+    more = pop_next(stack, size, box_tmax, index);
   }
 
   if (stats) {
@@ -189,4 +209,15 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
     stats->primitives_tested += prims_tested;
   }
   return found;
+}
+
+// The kernels (BvhKernels): the traversals above without an observer.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  return bvh_intersect_observed<kTriangles, kSpheres>(bvh, ray, hit, stats, NoVisitObserver{});
+}
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
 }

@@ -1,22 +1,14 @@
 #include "backends/plugin/plugin_failure.h"
 
+#include "core/geometry/ray_text.h"
+
 #include <fmt/core.h>
 
-#include <cmath>
-#include <cstdio>
 #include <utility>
 
 namespace twinray {
 
 namespace {
-
-std::string hex_float(float f) {
-  if (std::isnan(f)) return std::signbit(f) ? "-nan" : "nan";
-  if (std::isinf(f)) return f < 0.0f ? "-inf" : "inf";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%a", static_cast<double>(f));  // exact: float -> double is exact
-  return buffer;
-}
 
 std::string what_happened(const PluginFailureDetails& f) {
   if (f.cause == "signal") return fmt::format("crashed with {}", f.signal_name);
@@ -46,10 +38,7 @@ std::string_view to_string(PluginFailureKind kind) {
   return "crash";
 }
 
-std::string exact_ray_text(const Ray& r) {
-  return fmt::format("{} {} {} {} {} {} {} {}", hex_float(r.org.x), hex_float(r.org.y), hex_float(r.org.z),
-                     hex_float(r.dir.x), hex_float(r.dir.y), hex_float(r.dir.z), hex_float(r.tmin), hex_float(r.tmax));
-}
+std::string exact_ray_text(const Ray& r) { return format_ray_hex(r); }
 
 std::string describe(const PluginFailureDetails& f) {
   std::string s = fmt::format("{} {}", f.plugin.empty() ? std::string("plugin") : f.plugin, what_happened(f));

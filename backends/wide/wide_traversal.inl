@@ -11,7 +11,9 @@
 // one), then the inner children are visited in stored order, larger area first (SATO, see
 // wide_collapse.h), with no sorting at all.
 //
-// Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h).
+// Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes against
+// the same widened interval (cull_interval.h), so coplanar ties and hits at the ends of the interval are
+// decided exactly as by brute force.
 //
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
 // headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes()
@@ -100,12 +102,14 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
   std::uint32_t best_index = 0;  // into the store's array of the best hit's kind
   alignas(32) float entry[kWideWidth];
 
+  // Boxes are tested against the widened interval of cull_interval.h, primitives against the ray's own.
+  const float box_tmin = cull_min(ray.tmin);
   std::uint32_t ref = 0;  // the root node
   for (;;) {
     if (!WideRef::is_leaf(ref)) {
       const WideNode& node = bvh.nodes[ref];
       if (stats) boxes_tested += filled_slots(node);
-      const unsigned mask = test_boxes(node, box_ray, ray.tmin, tmax, entry);
+      const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
       if (mask != 0) {
         if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
         else ref = order_children(node, mask, entry, stack, size);
@@ -118,16 +122,15 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
         const std::uint32_t first_slot = first * kTriangleBlockLanes;
         for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
           BlockHits found;
-          unsigned hits = intersect_triangle_block(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                                   lane_mask(count - k), ray.tmin, tmax, found);
+          // t only: the winner's u, v are computed once, at the end.
+          unsigned hits = intersect_triangle_block_t(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
+                                                     lane_mask(count - k), ray.tmin, tmax, found);
           for (; hits != 0; hits &= hits - 1) {
             const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
             const std::uint32_t slot = first_slot + k + lane;
             const PrimitiveKey key = prims.triangle_keys[slot];
             if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
             hit.t = tmax = found.t[lane];
-            hit.u = found.u[lane];
-            hit.v = found.v[lane];
             hit.geom_id = key.geom_id;
             hit.prim_id = key.prim_id;
             best_is_sphere = false;
@@ -149,7 +152,7 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
         }
       }
     }
-    if (!pop_next(stack, size, tmax, ref)) break;
+    if (!pop_next(stack, size, cull_max(tmax), ref)) break;
   }
 
   if (stats) {
@@ -161,8 +164,10 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
-    hit.ng = triangle_geometric_normal(prims.triangle_vertex(best_index, 0), prims.triangle_vertex(best_index, 1),
-                                       prims.triangle_vertex(best_index, 2));
+    const glm::vec3 p0 = prims.triangle_vertex(best_index, 0), p1 = prims.triangle_vertex(best_index, 1),
+                    p2 = prims.triangle_vertex(best_index, 2);
+    triangle_barycentrics(tri_ray, p0, p1, p2, hit.t, hit.u, hit.v);
+    hit.ng = triangle_geometric_normal(p0, p1, p2);
   }
   return true;
 }
@@ -179,8 +184,8 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
       prims_tested += in_block;
       BlockHits unused;
-      if (intersect_triangle_block(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(in_block),
-                                   ray.tmin, ray.tmax, unused) != 0)
+      if (intersect_triangle_block_t(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
+                                     lane_mask(in_block), ray.tmin, ray.tmax, unused) != 0)
         return true;
     }
   } else if constexpr (kSpheres) {
@@ -209,11 +214,14 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
   bool found = false;
   alignas(32) float entry[kWideWidth];
 
+  // The widened box interval of cull_interval.h: a leaf whose only hit lies at the rounded tmin or tmax
+  // must not be culled by the box test's own rounding.
+  const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = bvh.nodes[index];
     if (stats) boxes_tested += filled_slots(node);
-    const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
+    const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {

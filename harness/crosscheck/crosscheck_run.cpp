@@ -1,6 +1,9 @@
 #include "harness/crosscheck/crosscheck_run.h"
 
 #include "backends/registry.h"
+#include "harness/arbiter/arbiter.h"
+#include "harness/arbiter/tolerances.h"
+#include "harness/crosscheck/arbitration.h"
 #include "harness/crosscheck/hit_comparison.h"
 #include "harness/crosscheck/ray_generation.h"
 #include "core/scene/scene_loader.h"
@@ -8,6 +11,7 @@
 #include "core/util/progress.h"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <chrono>
@@ -57,6 +61,55 @@ std::string describe_hit(const Hit& h) {
   return fmt::format("geom {} prim {} t={:.9g} uv=({:.6g},{:.6g})", h.geom_id, h.prim_id, h.t, h.u, h.v);
 }
 
+// The ray in exact bits (C99 hex floats), so that it can be replayed.
+std::string hex_ray(const Ray& r) {
+  return fmt::format("org ({:a}, {:a}, {:a}) dir ({:a}, {:a}, {:a}) t [{:a}, {:a}]", r.org.x, r.org.y, r.org.z, r.dir.x,
+                     r.dir.y, r.dir.z, r.tmin, r.tmax);
+}
+
+nlohmann::json ray_json(const Ray& r) {
+  return {{"org", {r.org.x, r.org.y, r.org.z}}, {"dir", {r.dir.x, r.dir.y, r.dir.z}}, {"tmin", r.tmin},
+          {"tmax", r.tmax}, {"hex", hex_ray(r)}};
+}
+
+nlohmann::json hit_json(const Hit& h) {
+  if (!h.found()) return nullptr;
+  return {{"geom_id", h.geom_id}, {"prim_id", h.prim_id}, {"t", h.t}, {"u", h.u}, {"v", h.v}};
+}
+
+constexpr std::size_t kWrongExamples = 5;
+
+nlohmann::json reasons_json(const ArbiterTally& t) {
+  nlohmann::json j = nlohmann::json::object();
+  for (std::size_t k = 0; k < arbiter::kReasonCount; ++k)
+    j[std::string(arbiter::to_string(static_cast<arbiter::Reason>(k)))] = t.reasons[k];
+  return j;
+}
+
+nlohmann::json tally_json(const ArbiterTally& t) {
+  nlohmann::json examples = nlohmann::json::array();
+  for (const WrongAnswer& w : t.examples)
+    examples.push_back({{"ray_index", w.ray_index},
+                        {"ray", ray_json(w.ray)},
+                        {"query", w.occlusion ? "any" : "closest"},
+                        {"answer", w.occlusion ? nlohmann::json(w.answered_occluded) : hit_json(w.answer)},
+                        {"exact", w.occlusion ? nlohmann::json(w.ruling.exact_occluded) : hit_json(w.ruling.exact)},
+                        {"reason", arbiter::to_string(w.ruling.reason)},
+                        {"detail", w.ruling.detail}});
+  return {{"ruled", t.ruled}, {"wrong", t.wrong}, {"max_t_rel_error", t.max_t_rel_error}, {"reasons", reasons_json(t)},
+          {"wrong_examples", examples}};
+}
+
+std::string wrong_reasons_text(const ArbiterTally& t) {
+  std::string s;
+  for (std::size_t k = 0; k < arbiter::kReasonCount; ++k) {
+    const auto reason = static_cast<arbiter::Reason>(k);
+    if (arbiter::is_wrong(reason) && t.reasons[k] > 0)
+      s += fmt::format("{}{} {}", s.empty() ? "" : ", ", arbiter::to_string(reason), t.reasons[k]);
+  }
+  return s.empty() ? "-" : s;
+}
+
 }  // namespace
 
 CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
@@ -95,6 +148,19 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
     hit_source = own_hit_source.get();
   }
 
+  // The arbiter's exact backend is built once; it rules the disputed rays of every kind.
+  std::unique_ptr<arbiter::Arbiter> arbiter;
+  if (settings.arbitrate) {
+    const auto arbiter_start = std::chrono::steady_clock::now();
+    arbiter = std::make_unique<arbiter::Arbiter>(scene.geometry);
+    fmt::print("built {:<12} in {:8.3f} s (arbiter)\n", "exact", seconds_since(arbiter_start));
+    std::fflush(stdout);
+  }
+  std::vector<ArbiterTally> arbiter_totals(backends.size());
+  std::size_t arbiter_disputed = 0, arbiter_ruled_rays = 0;
+  double arbiter_seconds = 0.0;
+  std::vector<std::string> capped_kinds;
+
   Progress progress("crosscheck", settings.kinds.size() * backends.size());
   std::size_t total_rays = 0, total_identical = 0, total_genuine = 0;
   std::vector<double> closest_seconds(backends.size(), 0.0);
@@ -130,8 +196,11 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
     report += fmt::format("  {:<14} {:>20} {:>7} {:>7} {:>8} {:>12} {:>22}\n", fmt::format("vs {}", names[0]),
                           "identical", "edge", "tie", "genuine", "max rel dt", "any-hit edge/genuine");
     j_kind["comparisons"] = nlohmann::json::array();
+    std::vector<std::uint8_t> disputes(rays.size(), 0);
     for (std::size_t k = 1; k < backends.size(); ++k) {
       const PairComparison c = compare(index, rays, runs[0].closest, runs[k].closest, runs[0].occluded, runs[k].occluded);
+      for (const std::size_t i : c.closest_disputes) disputes[i] |= kClosestDisputed;
+      for (const std::size_t i : c.occlusion_disputes) disputes[i] |= kOcclusionDisputed;
       report += fmt::format("  {:<14} {:>10} ({:7.3f}%) {:>7} {:>7} {:>8} {:>12.3g} {:>22}\n", names[k], c.identical,
                             100.0 * c.identical_fraction(), c.edge, c.tie, c.genuine, c.max_rel_t_diff,
                             fmt::format("{}/{}", c.occlusion_edge, c.occlusion_genuine));
@@ -158,6 +227,51 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
                                                       {"genuine", c.occlusion_genuine}}},
                                        {"max_rel_t_diff", c.max_rel_t_diff}});
     }
+    if (arbiter) {
+      std::vector<BackendAnswers> answers;
+      for (std::size_t k = 0; k < backends.size(); ++k)
+        answers.push_back({names[k], backends[k]->traits(), runs[k].closest, runs[k].occluded});
+      const ArbitrationResult a =
+          arbitrate(*arbiter, rays, answers, disputes, settings.arbiter_max_rays, kWrongExamples);
+      arbiter_disputed += a.disputed_rays;
+      arbiter_ruled_rays += a.ruled_rays;
+      arbiter_seconds += a.seconds;
+      if (a.capped()) capped_kinds.emplace_back(to_string(kind));
+      if (a.disputed_rays == 0) {
+        report += "  arbiter (exact): no disputed rays\n";
+      } else {
+        report += fmt::format("  arbiter (exact) on {} disputed rays{}, {:.2f} s:\n", a.disputed_rays,
+                              a.capped() ? fmt::format(" (cap reached: the first {} ruled)", a.ruled_rays) : "",
+                              a.seconds);
+        report += fmt::format("  {:<14} {:>8} {:>8} {:>14}  {}\n", "backend", "ruled", "wrong", "max t rel err",
+                              "wrong by reason");
+      }
+      nlohmann::json j_arbiter = nlohmann::json::object();
+      for (std::size_t k = 0; k < backends.size(); ++k) {
+        const ArbiterTally& t = a.backends[k];
+        if (a.disputed_rays != 0)
+          report += fmt::format("  {:<14} {:>8} {:>8} {:>14.3g}  {}\n", names[k], t.ruled, t.wrong, t.max_t_rel_error,
+                                wrong_reasons_text(t));
+        j_arbiter[names[k]] = {{"ruled", t.ruled}, {"wrong", t.wrong}, {"max_t_rel_error", t.max_t_rel_error},
+                               {"reasons", reasons_json(t)}};
+        accumulate(arbiter_totals[k], t, kWrongExamples);
+      }
+      for (std::size_t k = 0; k < backends.size(); ++k) {
+        for (const WrongAnswer& w : a.backends[k].examples) {
+          const Ray& ray = rays[w.ray_index];
+          report += fmt::format(
+              "    wrong {} answer of {}, ray {}: org ({:.9g}, {:.9g}, {:.9g}) dir ({:.9g}, {:.9g}, {:.9g}) t [{:.9g}, {:.9g}]\n"
+              "      bits: {}\n      {}: {}\n      exact: {}\n      why: {}: {}\n",
+              w.occlusion ? "any-hit" : "closest-hit", names[k], w.ray_index, ray.org.x, ray.org.y, ray.org.z, ray.dir.x,
+              ray.dir.y, ray.dir.z, ray.tmin, ray.tmax, hex_ray(ray), names[k],
+              w.occlusion ? (w.answered_occluded ? "occluded" : "not occluded") : describe_hit(w.answer),
+              w.occlusion ? (w.ruling.exact_occluded ? "occluded" : "not occluded") : describe_hit(w.ruling.exact),
+              arbiter::to_string(w.ruling.reason), w.ruling.detail);
+        }
+      }
+      j_kind["arbiter"] = j_arbiter;
+      j_kind["arbiter_rays"] = {{"disputed", a.disputed_rays}, {"ruled", a.ruled_rays}, {"seconds", a.seconds}};
+    }
     j_kinds[std::string(to_string(kind))] = j_kind;
   }
   progress.finish();
@@ -171,12 +285,28 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
     report += fmt::format("  {} {:.3f} M", names[k], r * 1e-6);
     j_rates[names[k]] = r;
   }
+  std::size_t arbiter_wrong = 0;
+  nlohmann::json j_arbiter = nlohmann::json::object();
+  if (arbiter) {
+    report += fmt::format("\narbiter (exact): {} disputed rays, {} ruled, {:.2f} s{}\n", arbiter_disputed,
+                          arbiter_ruled_rays, arbiter_seconds,
+                          capped_kinds.empty() ? "" : fmt::format(" (cap of {} rays per kind reached for {})",
+                                                                  settings.arbiter_max_rays, fmt::join(capped_kinds, ", ")));
+    for (std::size_t k = 0; k < backends.size(); ++k) {
+      const ArbiterTally& t = arbiter_totals[k];
+      report += fmt::format("  {:<14} ruled {:>8}  wrong {:>8}  max t rel err {:>10.3g}  {}\n", names[k], t.ruled,
+                            t.wrong, t.max_t_rel_error, wrong_reasons_text(t));
+      j_arbiter[names[k]] = tally_json(t);
+      arbiter_wrong += t.wrong;
+    }
+  }
   report += fmt::format("\nverdict: {} ({} genuine mismatches, {:.4f}% identical)\n", total_genuine == 0 ? "PASS" : "FAIL",
                         total_genuine, 100.0 * identical_fraction);
 
   CrosscheckReport out;
   out.text = std::move(report);
   out.genuine_mismatches = total_genuine;
+  out.arbiter_wrong = arbiter_wrong;
   out.json = {{"scene", scene.source.string()},
               {"seed", settings.seed},
               {"rays_per_kind", settings.rays_per_kind},
@@ -189,6 +319,18 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
               {"identical_fraction", identical_fraction},
               {"tolerances", {{"rel_t", kRelT}, {"abs_world", kAbsWorld}, {"grazing_cos", kGrazingCos}}},
               {"verdict", total_genuine == 0 ? "pass" : "fail"}};
+  if (arbiter) {
+    out.json["arbiter"] = j_arbiter;
+    out.json["arbiter_settings"] = {{"enabled", true},
+                                    {"max_rays_per_kind", settings.arbiter_max_rays},
+                                    {"disputed_rays", arbiter_disputed},
+                                    {"ruled_rays", arbiter_ruled_rays},
+                                    {"capped_kinds", capped_kinds},
+                                    {"seconds", arbiter_seconds},
+                                    {"tolerances", {{"world", arbiter::kWorld}, {"rel_t", arbiter::kRelT}}}};
+  } else {
+    out.json["arbiter_settings"] = {{"enabled", false}};
+  }
   return out;
 }
 

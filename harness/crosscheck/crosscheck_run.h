@@ -21,12 +21,17 @@ struct CrosscheckSettings {
   std::size_t rays_per_kind = 100000;
   std::vector<RayKind> kinds{std::begin(kAllRayKinds), std::end(kAllRayKinds)};
   std::uint64_t seed = 1;
+  // Rule every disagreement against the exact backend (harness/arbiter/arbiter.h), at most
+  // arbiter_max_rays rays per kind (the first disputed ones).
+  bool arbitrate = true;
+  std::size_t arbiter_max_rays = 100000;
 };
 
 struct CrosscheckReport {
   std::string text;       // the human-readable tables, verdict line included
   nlohmann::json json;    // the JSON document of docs/cli.md
   std::size_t genuine_mismatches = 0;
+  std::size_t arbiter_wrong = 0;  // answers the arbiter ruled wrong, all backends (informative: not in the verdict)
   bool passed() const { return genuine_mismatches == 0; }
 };
 

@@ -81,6 +81,27 @@ bool hit_is_ambiguous(const GeometryIndex& index, const Ray& ray, const Hit& hit
   return false;
 }
 
+RayComparison compare_ray(const GeometryIndex& index, const Ray& ray, const Hit& ha, const Hit& hb, bool occluded_a,
+                          bool occluded_b) {
+  RayComparison r;
+  const bool ambiguous = hit_is_ambiguous(index, ray, ha) || hit_is_ambiguous(index, ray, hb);
+  if (!ha.found() && !hb.found()) {
+    r.identical = true;
+  } else if (ha.found() && hb.found() && ha.geom_id == hb.geom_id && ha.prim_id == hb.prim_id) {
+    r.rel_t_diff = std::fabs(double(ha.t) - double(hb.t)) / std::max<double>(std::max(ha.t, hb.t), 1e-30);
+    r.identical = t_agrees(index, ray, ha.t, hb.t);
+    if (!r.identical && ambiguous) r.kind = MismatchClass::Edge;
+  } else if (ambiguous) {
+    // Checked before ties: neighbours across a shared edge also meet at equal t, and the edge is the
+    // better explanation.
+    r.kind = MismatchClass::Edge;
+  } else if (ha.found() && hb.found() && t_agrees(index, ray, ha.t, hb.t)) {
+    r.kind = MismatchClass::Tie;
+  }
+  if (occluded_a != occluded_b) r.occlusion = ambiguous ? OcclusionClass::Edge : OcclusionClass::Genuine;
+  return r;
+}
+
 PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, std::span<const Hit> a,
                        std::span<const Hit> b, std::span<const std::uint8_t> occluded_a,
                        std::span<const std::uint8_t> occluded_b, std::size_t max_examples) {
@@ -88,51 +109,36 @@ PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, st
   c.rays = rays.size();
   const bool with_occlusion = !occluded_a.empty() && !occluded_b.empty();
   for (std::size_t i = 0; i < rays.size(); ++i) {
-    const Ray& ray = rays[i];
     const Hit& ha = a[i];
     const Hit& hb = b[i];
     c.hits_a += ha.found() ? 1 : 0;
     c.hits_b += hb.found() ? 1 : 0;
+    const bool oa = with_occlusion && occluded_a[i] != 0, ob = with_occlusion && occluded_b[i] != 0;
+    const RayComparison r = compare_ray(index, rays[i], ha, hb, oa, ob);
+    if (r.rel_t_diff) c.max_rel_t_diff = std::max(c.max_rel_t_diff, *r.rel_t_diff);
 
-    const bool ambiguous = hit_is_ambiguous(index, ray, ha) || hit_is_ambiguous(index, ray, hb);
-    bool same = false;
-    MismatchClass kind = MismatchClass::Genuine;
-    if (!ha.found() && !hb.found()) {
-      same = true;
-    } else if (ha.found() && hb.found() && ha.geom_id == hb.geom_id && ha.prim_id == hb.prim_id) {
-      const double rel = std::fabs(double(ha.t) - double(hb.t)) / std::max<double>(std::max(ha.t, hb.t), 1e-30);
-      c.max_rel_t_diff = std::max(c.max_rel_t_diff, rel);
-      same = t_agrees(index, ray, ha.t, hb.t);
-      if (!same && ambiguous) kind = MismatchClass::Edge;
-    } else if (ambiguous) {
-      // Checked before ties: neighbours across a shared edge also meet at equal t, and the edge is the
-      // better explanation.
-      kind = MismatchClass::Edge;
-    } else if (ha.found() && hb.found() && t_agrees(index, ray, ha.t, hb.t)) {
-      kind = MismatchClass::Tie;
-    }
-
-    if (same) {
+    if (r.identical) {
       ++c.identical;
     } else {
-      switch (kind) {
+      c.closest_disputes.push_back(i);
+      switch (r.kind) {
         case MismatchClass::Edge: ++c.edge; break;
         case MismatchClass::Tie: ++c.tie; break;
         case MismatchClass::Genuine: ++c.genuine; break;
       }
-      if (kind == MismatchClass::Genuine && c.examples.size() < max_examples)
-        c.examples.push_back({i, kind, false, ha, hb, false, false});
+      if (r.kind == MismatchClass::Genuine && c.examples.size() < max_examples)
+        c.examples.push_back({i, r.kind, false, ha, hb, false, false});
     }
 
     if (with_occlusion) {
-      const bool oa = occluded_a[i] != 0, ob = occluded_b[i] != 0;
-      if (oa == ob) {
-        ++c.occlusion_agree;
-      } else if (ambiguous) {
-        ++c.occlusion_edge;
-      } else {
-        ++c.occlusion_genuine;
-        if (c.examples.size() < max_examples) c.examples.push_back({i, MismatchClass::Genuine, true, ha, hb, oa, ob});
+      if (oa != ob) c.occlusion_disputes.push_back(i);
+      switch (r.occlusion) {
+        case OcclusionClass::Agree: ++c.occlusion_agree; break;
+        case OcclusionClass::Edge: ++c.occlusion_edge; break;
+        case OcclusionClass::Genuine:
+          ++c.occlusion_genuine;
+          if (c.examples.size() < max_examples) c.examples.push_back({i, MismatchClass::Genuine, true, ha, hb, oa, ob});
+          break;
       }
     }
   }

@@ -26,6 +26,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -59,6 +60,9 @@ struct PairComparison {
   std::size_t occlusion_agree = 0;
   std::size_t occlusion_edge = 0, occlusion_genuine = 0;
   std::vector<Mismatch> examples;  // the first genuine mismatches, for diagnosis
+  // Every ray whose closest hits are not identical (edge, tie or genuine), and every ray whose any-hit answers
+  // differ, in ray order: what the arbiter rules on (harness/arbiter/arbiter.h).
+  std::vector<std::size_t> closest_disputes, occlusion_disputes;
 
   double identical_fraction() const { return rays ? static_cast<double>(identical) / static_cast<double>(rays) : 1.0; }
 };
@@ -81,6 +85,18 @@ class GeometryIndex {
 // True when the hit sits on a boundary where correct intersectors may differ (see the header comment).
 bool hit_is_ambiguous(const GeometryIndex& index, const Ray& ray, const Hit& hit);
 bool t_agrees(const GeometryIndex& index, const Ray& ray, float ta, float tb);
+
+// One ray's two answers, classified as compare() counts them: the closest hits (identical, edge, tie or
+// genuine) and the any-hit flags (agree, edge or genuine).
+enum class OcclusionClass { Agree, Edge, Genuine };
+struct RayComparison {
+  bool identical = false;  // closest hits identical
+  MismatchClass kind = MismatchClass::Genuine;  // when not identical
+  OcclusionClass occlusion = OcclusionClass::Agree;
+  std::optional<double> rel_t_diff;  // both hit the same primitive
+};
+RayComparison compare_ray(const GeometryIndex& index, const Ray& ray, const Hit& a, const Hit& b, bool occluded_a,
+                          bool occluded_b);
 
 PairComparison compare(const GeometryIndex& index, std::span<const Ray> rays, std::span<const Hit> a,
                        std::span<const Hit> b, std::span<const std::uint8_t> occluded_a,

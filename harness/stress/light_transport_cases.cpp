@@ -317,9 +317,25 @@ Outcome glass_caustic(const std::string& backend_name, const StressOptions& opti
   return out;
 }
 
+// The exact backend answers single rays for the arbiter at tens of microseconds each: rendering with it would
+// take hours, and these cases test the integrator, which every backend shares.
+StressCase not_for_exact(StressCase c) {
+  c.run = [run = c.run](const std::string& backend_name, const StressOptions& options) {
+    if (backend_name != "exact") return run(backend_name, options);
+    Outcome out;
+    out.status = Status::Skip;
+    out.required = false;
+    out.figures = "not rendered";
+    out.note = "exact: an arbiter for single rays, too slow to render with";
+    return out;
+  };
+  return c;
+}
+
 }  // namespace
 
 void add_light_transport_cases(std::vector<StressCase>& cases) {
+  const std::size_t first = cases.size();
   cases.push_back({"lt-furnace-long-paths", "light-transport",
                    "closed emissive furnace with albedo 0.9: L = Le / (1 - a), 10-segment average paths",
                    furnace_long_paths});
@@ -336,6 +352,7 @@ void add_light_transport_cases(std::vector<StressCase>& cases) {
   cases.push_back({"lt-glass-caustic", "light-transport",
                    "a caustic through a glass sphere from a small bright light: no NaN/Inf/negative samples",
                    glass_caustic});
+  for (std::size_t k = first; k < cases.size(); ++k) cases[k] = not_for_exact(std::move(cases[k]));
 }
 
 }  // namespace twinray::stress

@@ -50,6 +50,7 @@ const StressCase* find_case(std::string_view name);
 
 // The catalogue families, each in its own file.
 void add_geometry_cases(std::vector<StressCase>& cases);
+void add_grazing_slivers_case(std::vector<StressCase>& cases);  // geometry family, in its own file
 void add_robustness_cases(std::vector<StressCase>& cases);
 void add_scale_cases(std::vector<StressCase>& cases);
 void add_light_transport_cases(std::vector<StressCase>& cases);

@@ -17,6 +17,7 @@ const std::vector<StressCase>& all_cases() {
   static const std::vector<StressCase> cases = [] {
     std::vector<StressCase> c;
     add_geometry_cases(c);
+    add_grazing_slivers_case(c);
     add_robustness_cases(c);
     add_scale_cases(c);
     add_light_transport_cases(c);

@@ -1,0 +1,143 @@
+// The checks that compare answers with a reference, ray by ray (answers.h says what counts as wrong):
+//   closest-hit   closest hits of camera, uniform and diffuse rays
+//   any-hit       any-hit answers of shadow (and other) rays
+//   ray-interval  the same rays cut just before and just after their first surface (grade_rays.h)
+//   axis-aligned  rays with +0/-0 direction components and origins on the bounding box's faces
+//   spheres       rays at spheres from outside, inside, near and at the tangent
+//   ties          rays at exactly duplicated triangles, judged by the tie rule (hit.h) whether or not the
+//                 plugin claims it (the suite decides, with "required": "if-claimed", whether it counts)
+
+#include "core/util/input_error.h"
+#include "harness/grade/answers.h"
+#include "harness/grade/checks.h"
+#include "harness/grade/disagreement_image.h"
+#include "harness/grade/grade_rays.h"
+
+#include <fmt/core.h>
+
+namespace twinray::grade {
+
+namespace {
+
+// Default ray counts when the suite gives none ("count"): per kind for closest-hit and any-hit.
+constexpr std::size_t kDefaultKindRays = 65536;
+constexpr std::size_t kDefaultSpecialRays = 20000;
+
+struct RaySet {
+  std::vector<Ray> rays;
+  Queries queries = Queries::Both;
+  int image_width = 0, image_height = 0;  // > 0: rays [0, w*h) are the pixels of an image
+};
+
+[[noreturn]] void suite_error(const CheckContext& ctx, const std::string& message) {
+  throw InputError(ctx.env.suite.manifest, "", fmt::format("check '{}': {}", ctx.spec.name, message));
+}
+
+RaySet rays_for(CheckContext& ctx) {
+  const CheckSpec& spec = ctx.spec;
+  const Scene& scene = ctx.scene.scene();
+  const std::size_t count = ctx.count_or(kDefaultSpecialRays);
+  RaySet set;
+  switch (spec.category) {
+    case Category::ClosestHit: {
+      set.queries = Queries::Closest;
+      std::vector<crosscheck::RayKind> kinds = spec.rays.empty() ? std::vector{crosscheck::RayKind::Camera} : spec.rays;
+      if (spec.image) {
+        // The image's pixels first; the other kinds follow.
+        PixelRays pixels = camera_pixel_rays(scene, ctx.count_or(kDefaultKindRays));
+        set.image_width = pixels.width;
+        set.image_height = pixels.height;
+        set.rays = std::move(pixels.rays);
+        std::erase(kinds, crosscheck::RayKind::Camera);
+      }
+      for (const crosscheck::RayKind k : kinds) {
+        const std::vector<Ray> some =
+            kind_rays(k, scene, ctx.scene.reference("embree"), ctx.count_or(kDefaultKindRays), spec.seed);
+        set.rays.insert(set.rays.end(), some.begin(), some.end());
+      }
+      break;
+    }
+    case Category::AnyHit:
+      set.queries = Queries::Any;
+      set.rays = ctx.rays_of_kinds({crosscheck::RayKind::Shadow}, ctx.count_or(kDefaultKindRays));
+      break;
+    case Category::RayInterval: {
+      // count is the number of variants; each base ray that hits gives four.
+      const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Shadow},
+                                                      std::max<std::size_t>(1, count / 4));
+      const Answers first = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Closest);
+      set.rays = interval_rays(rays, first.hits);
+      break;
+    }
+    case Category::AxisAligned: set.rays = axis_aligned_rays(scene, count, spec.seed); break;
+    case Category::Spheres:
+      if (!scene.geometry.has_spheres()) suite_error(ctx, "a spheres check needs a scene with spheres");
+      set.rays = sphere_rays(scene, count, spec.seed);
+      break;
+    case Category::Ties:
+      if (!scene.geometry.has_triangles()) suite_error(ctx, "a ties check needs a scene with (duplicated) triangles");
+      set.queries = Queries::Closest;
+      set.rays = tie_rays(scene, count, spec.seed);
+      break;
+    default: throw std::logic_error("not an answer check");
+  }
+  if (set.rays.empty()) suite_error(ctx, "its scene gives no rays of the requested kinds");
+  return set;
+}
+
+std::string summary_of_allowed(const Judgement& j) {
+  std::string s;
+  if (j.edge) s += fmt::format(", {} edge", j.edge);
+  if (j.tie) s += fmt::format(", {} tie", j.tie);
+  if (j.overruled) s += fmt::format(", {} where {} arithmetic overruled the reference", j.overruled, j.second_opinion);
+  return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
+}
+
+}  // namespace
+
+CheckVerdict run_answer_check(CheckContext& ctx) {
+  const RaySet set = rays_for(ctx);
+  const std::string reference = ctx.reference_name();
+  // The ties check measures the tie rule itself; elsewhere a plugin is held to it only when it claims it.
+  const bool tie_rule = ctx.spec.category == Category::Ties || ctx.env.plugin.traits().honours_ties;
+
+  const std::unique_ptr<Backend> plugin = ctx.built_plugin();
+  const Answers mine = trace_rays(*plugin, set.rays, set.queries);
+  const Answers expected = trace_rays(ctx.scene.reference(reference), set.rays, set.queries);
+  const Judgement j = judge(ctx.scene, set.rays, mine, expected,
+                            {set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
+
+  const std::size_t answers = set.rays.size() * (set.queries == Queries::Both ? 2 : 1);
+  CheckVerdict v;
+  v.passed = j.wrong_total() == 0;
+  v.figures = {{"rays", set.rays.size()},
+               {"answers", answers},
+               {"wrong", j.wrong_total()},
+               {"wrong_closest", j.wrong_closest},
+               {"wrong_any", j.wrong_any},
+               {"edge", j.edge},
+               {"tie", j.tie},
+               {"overruled", j.overruled},
+               {"unarbitrated", j.unarbitrated},
+               {"ruled", j.ruled},
+               {"reference", reference},
+               {"second_opinion", j.second_opinion}};
+  if (v.passed) {
+    v.detail = fmt::format("all {} answers right{}", answers, summary_of_allowed(j));
+  } else {
+    const WrongAnswer& first = j.wrong.front();
+    v.detail = fmt::format("{} of {} answers wrong ({:.3g}%); first, ray {}: {}", j.wrong_total(), answers,
+                           100.0 * static_cast<double>(j.wrong_total()) / static_cast<double>(answers), first.ray,
+                           j.first_wrong_description);
+    v.reproduce = ctx.trace_command(set.rays[first.ray]);
+  }
+
+  if (set.image_width > 0 && ctx.env.images) {
+    const std::size_t pixels = static_cast<std::size_t>(set.image_width) * static_cast<std::size_t>(set.image_height);
+    v.image = disagreement_image(set.image_width, set.image_height, std::span<const Ray>(set.rays.data(), pixels),
+                                 std::span<const Hit>(expected.hits.data(), pixels), j.wrong);
+  }
+  return v;
+}
+
+}  // namespace twinray::grade

@@ -1,0 +1,73 @@
+#include "harness/grade/checks.h"
+
+#include "harness/grade/grade_rays.h"
+#include "core/geometry/ray_text.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+
+namespace twinray::grade {
+
+std::unique_ptr<Backend> CheckContext::built_plugin() const {
+  std::unique_ptr<Backend> plugin = env.plugin.launch(limits());
+  plugin->build(scene.geometry());
+  return plugin;
+}
+
+std::string CheckContext::reference_name() const {
+  // A ties check is refereed by brute, which honours the tie rule and so names the lowest-id copy.
+  return spec.reference == Reference::Brute || spec.category == Category::Ties ? "brute" : "embree";
+}
+
+std::string shell_quote(const std::string& word) {
+  const bool safe = !word.empty() && std::all_of(word.begin(), word.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+           std::string_view("-_./:,+=@%").find(c) != std::string_view::npos;
+  });
+  if (safe) return word;
+  std::string quoted = "'";
+  for (char c : word) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+std::string CheckContext::trace_command(const Ray& ray) const {
+  return fmt::format("{} trace {} --backends {} --ray '{}'", shell_quote(env.twinray), shell_quote(scene.trace_name()),
+                     shell_quote("plugin:" + env.plugin.path().string() + "," + reference_name()), format_ray_hex(ray));
+}
+
+std::string CheckContext::grade_command() const {
+  const std::string suite = env.suite.bundled ? env.suite.name : env.suite.dir.string();
+  return fmt::format("{} grade {} --suite {} --check {}", shell_quote(env.twinray), shell_quote(env.plugin.path().string()),
+                     shell_quote(suite), shell_quote(spec.name));
+}
+
+std::vector<Ray> CheckContext::rays_of_kinds(const std::vector<crosscheck::RayKind>& fallback, std::size_t count) const {
+  const std::vector<crosscheck::RayKind>& kinds = spec.rays.empty() ? fallback : spec.rays;
+  std::vector<Ray> rays;
+  for (const crosscheck::RayKind k : kinds) {
+    const std::vector<Ray> some = kind_rays(k, scene.scene(), scene.reference("embree"), count, spec.seed);
+    rays.insert(rays.end(), some.begin(), some.end());
+  }
+  return rays;
+}
+
+CheckVerdict run_check(CheckContext& context) {
+  switch (context.spec.category) {
+    case Category::Build: return run_build_check(context);
+    case Category::ClosestHit:
+    case Category::AnyHit:
+    case Category::RayInterval:
+    case Category::AxisAligned:
+    case Category::Spheres:
+    case Category::Ties: return run_answer_check(context);
+    case Category::Watertight: return run_watertight_check(context);
+    case Category::ThreadSafety: return run_thread_safety_check(context);
+    case Category::Determinism: return run_determinism_check(context);
+    case Category::Performance: return run_performance_check(context);
+    case Category::TreeQuality: return run_tree_quality_check(context);
+  }
+  throw std::logic_error("unknown check category");
+}
+
+}  // namespace twinray::grade

@@ -1,0 +1,255 @@
+#include "harness/grade/grade_rays.h"
+
+#include "core/camera/pinhole_camera.h"
+#include "core/sampling/rng.h"
+#include "core/sampling/warp.h"
+#include "harness/crosscheck/ray_generation.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <map>
+
+namespace twinray::grade {
+
+namespace {
+
+glm::vec2 next2(Rng& rng) { return {rng.next_float(), rng.next_float()}; }
+
+float signed_zero(Rng& rng) { return (rng.next_u32() & 1u) != 0 ? -0.0f : 0.0f; }
+
+// The scene's bounds, or a unit box around the origin for an empty scene.
+Bounds3 scene_box(const Scene& scene) {
+  Bounds3 b = scene.geometry.bounds();
+  if (b.empty()) b = {glm::vec3(-1.0f), glm::vec3(1.0f)};
+  return b;
+}
+
+Bounds3 padded(Bounds3 b, float fraction) {
+  const float pad = std::max(fraction * b.diagonal(), 1e-3f * std::max(1.0f, glm::length(b.center())));
+  b.lo -= glm::vec3(pad);
+  b.hi += glm::vec3(pad);
+  return b;
+}
+
+glm::vec3 point_in(const Bounds3& b, Rng& rng) {
+  const glm::vec3 u{rng.next_float(), rng.next_float(), rng.next_float()};
+  return b.lo + u * (b.hi - b.lo);
+}
+
+Ray make(const glm::vec3& org, const glm::vec3& dir, float tmin = 0.0f, float tmax = INFINITY) {
+  Ray r;
+  r.org = org;
+  r.dir = dir;
+  r.tmin = tmin;
+  r.tmax = tmax;
+  return r;
+}
+
+}  // namespace
+
+PixelRays camera_pixel_rays(const Scene& scene, std::size_t count) {
+  CameraDesc desc = scene.camera;
+  const double aspect = static_cast<double>(desc.width) / static_cast<double>(std::max(desc.height, 1));
+  const double target = static_cast<double>(std::max<std::size_t>(count, 1));
+  const int width = std::max(1, static_cast<int>(std::lround(std::sqrt(target * aspect))));
+  const int height = std::max(1, static_cast<int>(std::lround(target / width)));
+  desc.width = width;
+  desc.height = height;
+  const PinholeCamera camera(desc);
+  PixelRays out;
+  out.width = width;
+  out.height = height;
+  out.rays.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  for (int j = 0; j < height; ++j)
+    for (int i = 0; i < width; ++i) out.rays.push_back(camera.pixel_center_ray(i, j));
+  return out;
+}
+
+std::vector<Ray> kind_rays(crosscheck::RayKind kind, const Scene& scene, const Backend& hit_source, std::size_t count,
+                           std::uint64_t seed) {
+  if (kind == crosscheck::RayKind::Camera) return camera_pixel_rays(scene, count).rays;
+  return crosscheck::generate_rays(kind, scene, hit_source, count, seed);
+}
+
+std::vector<Ray> interval_rays(std::span<const Ray> rays, std::span<const Hit> hits) {
+  std::vector<Ray> out;
+  out.reserve(4 * rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (!hits[i].found()) continue;
+    const Ray& r = rays[i];
+    const float t = hits[i].t;
+    const float before = t * (1.0f - kIntervalMargin), after = t * (1.0f + kIntervalMargin);
+    if (!(before > r.tmin) || !(after < r.tmax)) continue;  // no room on one side: skip the ray
+    out.push_back(make(r.org, r.dir, r.tmin, before));  // ends just before the surface
+    out.push_back(make(r.org, r.dir, after, r.tmax));   // starts just after it
+    out.push_back(make(r.org, r.dir, r.tmin, after));   // ends just after it
+    out.push_back(make(r.org, r.dir, before, r.tmax));  // starts just before it
+  }
+  return out;
+}
+
+std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::uint64_t seed) {
+  Rng rng = Rng::keyed(seed, 0xa715, 1);
+  const Bounds3 tight = scene_box(scene);
+  const Bounds3 around = padded(tight, 0.1f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  for (std::size_t i = 0; rays.size() < count; ++i) {
+    const int axis = static_cast<int>(rng.next_below(3));
+    const bool negative = (rng.next_u32() & 1u) != 0;
+    glm::vec3 dir, org;
+    switch (i % 4) {
+      case 0:  // along an axis; the other two components are +0 or -0
+        dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
+        dir[axis] = negative ? -1.0f : 1.0f;
+        org = point_in(around, rng);
+        break;
+      case 1: {  // in a coordinate plane: one component exactly +0 or -0
+        dir = sample_uniform_sphere(next2(rng));
+        dir[axis] = signed_zero(rng);
+        if (glm::dot(dir, dir) == 0.0f) continue;
+        org = point_in(around, rng);
+        break;
+      }
+      default: {  // from exactly on a face of the bounding box, pointing inward (along the axis, or in a plane)
+        org = point_in(tight, rng);
+        org[axis] = negative ? tight.hi[axis] : tight.lo[axis];
+        const float inward = negative ? -1.0f : 1.0f;
+        if (i % 4 == 2) {
+          dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
+          dir[axis] = inward;
+        } else {
+          dir = sample_uniform_sphere(next2(rng));
+          dir[axis] = inward * std::max(std::fabs(dir[axis]), 0.1f);
+          dir[(axis + 1 + static_cast<int>(rng.next_below(2))) % 3] = signed_zero(rng);
+        }
+        break;
+      }
+    }
+    rays.push_back(make(org, dir));
+  }
+  return rays;
+}
+
+namespace {
+
+// Area-weighted vertex normals keyed by position (bit for bit), over every mesh: meshes whose faces do not
+// share vertex indices (a box of six separate faces) still get one normal per corner, between its faces.
+class VertexNormals {
+ public:
+  explicit VertexNormals(const SceneGeometry& g) {
+    for (const TriangleMesh& m : g.meshes)
+      for (const glm::uvec3& t : m.indices) {
+        const glm::vec3 n = glm::cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+        for (int k = 0; k < 3; ++k) sums_[key(m.positions[t[k]])] += n;
+      }
+  }
+  glm::vec3 at(const glm::vec3& p) const {
+    const auto it = sums_.find(key(p));
+    return it == sums_.end() ? glm::vec3(0.0f) : it->second;
+  }
+
+ private:
+  using Key = std::array<std::uint32_t, 3>;
+  static Key key(const glm::vec3& p) {
+    return {std::bit_cast<std::uint32_t>(p.x), std::bit_cast<std::uint32_t>(p.y), std::bit_cast<std::uint32_t>(p.z)};
+  }
+  std::map<Key, glm::vec3> sums_;
+};
+
+}  // namespace
+
+std::vector<Ray> watertight_rays(const Scene& scene, std::size_t count, std::uint64_t seed,
+                                 std::optional<glm::vec3> origin) {
+  Rng rng = Rng::keyed(seed, 0x3a7e, 2);
+  const Bounds3 box = scene_box(scene);
+  const glm::vec3 inside = origin.value_or(box.center());
+  const float reach = 2.0f * std::max(box.diagonal(), 1e-3f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  const auto& meshes = scene.geometry.meshes;
+  if (meshes.empty()) return rays;
+  const VertexNormals normals(scene.geometry);
+  while (rays.size() < count) {
+    const TriangleMesh& mesh = meshes[rng.next_below(static_cast<std::uint32_t>(meshes.size()))];
+    if (mesh.indices.empty()) continue;
+    const glm::uvec3 tri = mesh.indices[rng.next_below(static_cast<std::uint32_t>(mesh.indices.size()))];
+    const glm::vec3 p0 = mesh.positions[tri[0]], p1 = mesh.positions[tri[1]];
+    glm::vec3 dir;
+    switch (rays.size() % 4) {
+      case 0: dir = sample_uniform_sphere(next2(rng)); break;           // anywhere
+      case 1: dir = p0 - inside; break;                                 // exactly through a vertex
+      case 2: dir = 0.5f * (p0 + p1) - inside; break;                   // through an edge's midpoint
+      default: {  // from outside, at a vertex, along its normal: between all its faces, across none of them
+        const glm::vec3 n = normals.at(p0);
+        if (glm::dot(n, n) == 0.0f) continue;
+        const glm::vec3 out = glm::normalize(n);
+        rays.push_back(make(p0 + reach * out, -out));
+        continue;
+      }
+    }
+    if (glm::dot(dir, dir) == 0.0f) continue;
+    rays.push_back(make(inside, dir));
+  }
+  return rays;
+}
+
+std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_t seed) {
+  Rng rng = Rng::keyed(seed, 0x5bee, 3);
+  std::vector<Ray> rays;
+  const auto& spheres = scene.geometry.spheres;
+  if (spheres.empty()) return rays;
+  rays.reserve(count);
+  for (std::size_t i = 0; rays.size() < count; ++i) {
+    const Sphere& s = spheres[i % spheres.size()];
+    const glm::vec3 away = sample_uniform_sphere(next2(rng));
+    // A unit vector perpendicular to `away`, for offsets across the disc the sphere shows from there.
+    const glm::vec3 helper = std::fabs(away.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 across = glm::normalize(glm::cross(away, helper));
+    const glm::vec3 from = s.center + (2.0f + 8.0f * rng.next_float()) * s.radius * away;
+    switch ((i / spheres.size()) % 6) {
+      case 0: {  // from outside at a point of the disc
+        const glm::vec2 d = sample_concentric_disk(next2(rng)) * 0.9f;
+        const glm::vec3 across2 = glm::cross(away, across);
+        rays.push_back(make(from, s.center + s.radius * (d.x * across + d.y * across2) - from));
+        break;
+      }
+      case 1:  // from inside
+        rays.push_back(make(s.center + 0.5f * s.radius * rng.next_float() * away, sample_uniform_sphere(next2(rng))));
+        break;
+      case 2: rays.push_back(make(from, s.center + 0.99f * s.radius * across - from)); break;  // just inside the rim
+      case 3: rays.push_back(make(from, s.center + 1.01f * s.radius * across - from)); break;  // just outside it
+      case 4: rays.push_back(make(from, s.center + s.radius * across - from)); break;          // tangent
+      default: rays.push_back(make(from, s.center + 1.5f * s.radius * across - from)); break; // a clear miss
+    }
+  }
+  return rays;
+}
+
+std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t seed) {
+  Rng rng = Rng::keyed(seed, 0x71e5, 4);
+  const Bounds3 around = padded(scene_box(scene), 0.5f);
+  std::vector<Ray> rays;
+  const auto& meshes = scene.geometry.meshes;
+  if (meshes.empty()) return rays;
+  rays.reserve(count);
+  while (rays.size() < count) {
+    const TriangleMesh& mesh = meshes[rng.next_below(static_cast<std::uint32_t>(meshes.size()))];
+    if (mesh.indices.empty()) continue;
+    const glm::uvec3 tri = mesh.indices[rng.next_below(static_cast<std::uint32_t>(mesh.indices.size()))];
+    // Barycentrics in the triangle shrunk to 70% around its centroid: at least 0.1 from every edge.
+    glm::vec3 b = sample_uniform_triangle(next2(rng));
+    b = 0.1f + 0.7f * b;
+    const glm::vec3 target = b[0] * mesh.positions[tri[0]] + b[1] * mesh.positions[tri[1]] + b[2] * mesh.positions[tri[2]];
+    const glm::vec3 org = point_in(around, rng);
+    if (glm::dot(target - org, target - org) == 0.0f) continue;
+    rays.push_back(make(org, target - org));
+  }
+  return rays;
+}
+
+}  // namespace twinray::grade

@@ -1,0 +1,167 @@
+#include "harness/grade/grade_run.h"
+
+#include "core/scene/shared_data.h"
+#include "core/util/fp_mode.h"
+#include "core/util/input_error.h"
+#include "harness/grade/checks.h"
+#include "harness/grade/grade_scene.h"
+#include "harness/grade/plugin_launcher.h"
+#include "harness/grade/suite.h"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <memory>
+#include <stdexcept>
+
+namespace twinray::grade {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+bool claims(const BackendTraits& traits, Category category) {
+  if (category == Category::Watertight) return traits.watertight;
+  if (category == Category::Ties) return traits.honours_ties;
+  return true;
+}
+
+// Every built-in backend a check of this category uses on its scene.
+void prepare_references(CheckContext& ctx) {
+  ctx.scene.reference("embree");  // rays that start on surfaces come from its first hits
+  ctx.scene.reference(ctx.reference_name());
+  if (ctx.spec.category == Category::Performance) ctx.scene.reference("embree-fast");
+  if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality) ctx.scene.reference("bvh");
+}
+
+// Runs one check in a fresh plugin worker and fills its outcome, detail, reproduce line, figures and image.
+void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckResult& r,
+             std::vector<PendingImage>& images) {
+  // The references are built before the check's clock starts: its time limit is the plugin's.
+  prepare_references(ctx);
+  ctx.deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                                       std::chrono::duration<double>(ctx.spec.time_limit_seconds));
+  try {
+    CheckVerdict v = run_check(ctx);
+    r.outcome = v.passed ? Outcome::Pass : Outcome::Fail;
+    if (!v.scored) r.max_points = 0.0;
+    r.detail = std::move(v.detail);
+    r.reproduce = v.passed ? "" : std::move(v.reproduce);
+    if (v.image) {
+      const std::filesystem::path png = image_dir / (ctx.spec.name + ".png");
+      r.image = png.string();
+      images.push_back({png, std::move(*v.image)});
+    }
+    r.figures = std::move(v.figures);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::logic_error&) {
+    throw;  // a bad --check name or a grader bug is never the plugin's fault
+  } catch (...) {
+    const FailureReport f = classify_failure(std::current_exception());
+    r.outcome = f.outcome;
+    r.detail = f.detail;
+    r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    if (!f.output.empty()) r.figures["plugin_output"] = f.output;
+  }
+}
+
+std::vector<const CheckSpec*> selected_checks(const Suite& suite, const std::vector<std::string>& only) {
+  std::vector<const CheckSpec*> checks;
+  if (only.empty()) {
+    for (const CheckSpec& c : suite.checks) checks.push_back(&c);
+    return checks;
+  }
+  for (const std::string& name : only)
+    if (suite.find_check(name) == nullptr)
+      throw std::invalid_argument(fmt::format("no check '{}' in suite '{}'", name, suite.name));
+  for (const CheckSpec& c : suite.checks)  // manifest order, whatever the order of --check
+    if (std::find(only.begin(), only.end(), c.name) != only.end()) checks.push_back(&c);
+  return checks;
+}
+
+}  // namespace
+
+Scorecard run_grade(const GradeSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  const ScopedFlushDenormals ftz;  // the mode every command queries backends in (core/util/fp_mode.h)
+  const Suite suite = load_suite(settings.suite);
+  const std::vector<const CheckSpec*> checks = selected_checks(suite, settings.only);
+  const PluginLauncher plugin(settings.plugin);
+  const bool shared_data = find_shared_data(suite.dir).has_value();
+
+  Scorecard card;
+  card.plugin = plugin.path().string();
+  card.plugin_name = plugin.name();
+  card.claims = plugin.traits();
+  card.suite = suite.name;
+  card.suite_path = suite.manifest.string();
+
+  if (settings.on_start) settings.on_start(card, checks.size());
+
+  // Scenes are loaded on first use and dropped after their last check (a million-triangle scene and its
+  // reference backends should not stay for the rest of the suite).
+  std::map<std::string, std::size_t> last_use;
+  for (std::size_t i = 0; i < checks.size(); ++i) last_use[checks[i]->scene] = i;
+  std::map<std::string, std::unique_ptr<GradeScene>> scenes;
+  std::map<std::string, const CheckResult*> done;  // by name; points into card.checks (reserved below)
+  card.checks.reserve(checks.size());
+  const CheckEnvironment env{suite, plugin, settings.twinray, !settings.image_dir.empty()};
+
+  for (std::size_t i = 0; i < checks.size(); ++i) {
+    const CheckSpec& spec = *checks[i];
+    const SuiteScene& scene_spec = suite.scenes.at(spec.scene);
+    CheckResult r;
+    r.name = spec.name;
+    r.category = spec.category;
+    r.visibility = spec.visibility;
+    r.description = spec.description;
+    const bool claimed = claims(plugin.traits(), spec.category);
+    r.required = spec.requirement == Requirement::Required || (spec.requirement == Requirement::IfClaimed && claimed);
+    r.max_points = spec.requirement == Requirement::IfClaimed && !claimed ? 0.0 : spec.points;
+    const auto check_start = std::chrono::steady_clock::now();
+
+    // Prerequisites that ran and did not pass. One skipped for want of the shared data folder makes this
+    // check uncounted too: its points must not depend on the machine.
+    std::string unmet;
+    bool unmet_uncounted = false;
+    for (const std::string& need : spec.needs) {
+      const auto it = done.find(need);
+      if (it == done.end() || it->second->outcome == Outcome::Pass) continue;
+      unmet += (unmet.empty() ? "" : ", ") + need + " (" + std::string(to_string(it->second->outcome)) + ")";
+      unmet_uncounted = unmet_uncounted || (it->second->outcome == Outcome::Skipped && it->second->max_points == 0.0);
+    }
+    if (scene_spec.needs_shared_data && !shared_data) {
+      r.outcome = Outcome::Skipped;
+      r.max_points = 0.0;
+      r.detail = fmt::format("scene '{}' needs the shared data folder (set TWINRAY_SHARED); not counted", spec.scene);
+    } else if (!unmet.empty()) {
+      r.outcome = Outcome::Skipped;
+      r.detail = "needs " + unmet + " to pass first";
+      if (unmet_uncounted) r.max_points = 0.0;
+    } else {
+      std::unique_ptr<GradeScene>& scene = scenes[spec.scene];
+      if (!scene) scene = std::make_unique<GradeScene>(scene_spec, suite);
+      CheckContext ctx{spec, *scene, env, {}};
+      execute(ctx, settings.image_dir, r, card.images);
+      if (!r.required && r.failed() && spec.requirement == Requirement::IfClaimed)
+        r.detail += " (not claimed by the plugin: reported, not required)";
+    }
+    r.points = r.outcome == Outcome::Pass ? r.max_points : 0.0;
+    r.seconds = seconds_since(check_start);
+    if (last_use[spec.scene] == i) scenes.erase(spec.scene);
+    if (spec.category == Category::Performance || spec.category == Category::TreeQuality)
+      card.performance[spec.name] = r.figures;
+    card.checks.push_back(std::move(r));
+    done[spec.name] = &card.checks.back();
+    if (settings.on_check) settings.on_check(card.checks.back(), i + 1, checks.size());
+  }
+  card.seconds = seconds_since(start);
+  return card;
+}
+
+}  // namespace twinray::grade

@@ -1,0 +1,72 @@
+#include "harness/grade/plugin_launcher.h"
+
+#include "backends/plugin/isolated_plugin_backend.h"
+#include "backends/plugin/plugin_failure.h"
+#include "core/util/input_error.h"
+
+#include <fmt/core.h>
+
+namespace twinray::grade {
+
+namespace {
+
+// The limits of one check: its deadline bounds all work, build included; one ray has its own, shorter limit.
+PluginLimits limits_of(const LaunchLimits& l) {
+  PluginLimits limits;
+  limits.deadline = l.deadline;
+  if (l.memory_bytes != 0) limits.memory_bytes = l.memory_bytes;
+  if (l.ray_seconds > 0.0) limits.query_seconds = l.ray_seconds;
+  return limits;
+}
+
+// One line: what happened and where, in the isolated backend's own words (plugin_failure.h). The ray goes
+// into the reproduce line and the plugin's output into the check's figures, so both are left out here.
+std::string describe_failure(const PluginFailure& f) {
+  PluginFailureDetails d = f;
+  d.plugin = "the plugin";
+  d.ray.reset();
+  d.ray_index.reset();
+  return describe(d);
+}
+
+}  // namespace
+
+PluginLauncher::PluginLauncher(std::filesystem::path so) : path_(std::filesystem::absolute(so)) {
+  // One worker loads it now: a library that is not a plugin is bad input before any check runs.
+  try {
+    const std::unique_ptr<IsolatedPluginBackend> probe = make_isolated_plugin_backend(path_);
+    name_ = std::string(probe->name());
+    traits_ = probe->traits();
+  } catch (const PluginFailure& f) {
+    // Dying while loading (a crashing static constructor or create()) is the plugin's failure, but there is
+    // nothing to grade: every check would fail the same way.
+    throw InputError(path_, "", "the plugin failed while loading: " + describe_failure(f));
+  }
+}
+
+std::unique_ptr<Backend> PluginLauncher::launch(const LaunchLimits& limits) const {
+  return make_isolated_plugin_backend(path_, limits_of(limits));
+}
+
+FailureReport classify_failure(const std::exception_ptr& failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError&) {
+    throw;
+  } catch (const PluginFailure& f) {
+    FailureReport r;
+    r.outcome = f.kind == PluginFailureKind::Timeout ? Outcome::Timeout
+                : f.kind == PluginFailureKind::Crash ? Outcome::Crash
+                                                      : Outcome::Fail;
+    r.detail = describe_failure(f);
+    r.ray = f.ray;
+    r.output = f.output;
+    return r;
+  } catch (const std::runtime_error& e) {
+    // What the plugin reported itself (a failed build, with its message) and contract violations the
+    // backend found without the worker dying.
+    return {Outcome::Fail, e.what(), std::nullopt, {}};
+  }
+}
+
+}  // namespace twinray::grade

@@ -1,0 +1,294 @@
+#include "harness/scenes/named_scene.h"
+
+#include "core/scene/mesh_scene.h"
+#include "core/scene/procedural.h"
+#include "core/scene/scene_loader.h"
+#include "core/scene/shared_data.h"
+#include "core/util/input_error.h"
+#include "harness/stress/stress_support.h"
+
+#include <fmt/core.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <limits>
+
+namespace twinray {
+
+namespace {
+
+// Generous caps: a procedural name comes from a command line or a suite, and a typo must not allocate
+// hundreds of gigabytes.
+constexpr long long kMaxProceduralTriangles = 20'000'000;
+constexpr int kMaxSphereSubdivisions = 9;  // 20 * 4^9 = 5.2M triangles
+
+class ProceduralArgs {
+ public:
+  ProceduralArgs(std::string_view full_name, std::string_view kind, std::vector<std::string> args)
+      : full_name_(full_name), kind_(kind), args_(std::move(args)) {}
+
+  std::size_t size() const { return args_.size(); }
+
+  void expect_count(std::size_t lo, std::size_t hi, std::string_view usage) const {
+    if (args_.size() < lo || args_.size() > hi)
+      fail(fmt::format("'{}' takes {} (procedural:{}:{})", kind_, lo == hi && lo == 0 ? "no arguments" : "arguments",
+                       kind_, usage));
+  }
+
+  long long integer(std::size_t i, long long lo, long long hi, std::string_view what) const {
+    const std::string& s = args_[i];
+    long long value = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+    if (ec != std::errc() || end != s.data() + s.size() || value < lo || value > hi)
+      fail(fmt::format("{} must be an integer in [{}, {}], got '{}'", what, lo, hi, s));
+    return value;
+  }
+
+  float real(std::size_t i, std::string_view what, bool positive = false) const {
+    const std::string& s = args_[i];
+    char* end = nullptr;
+    const float value = std::strtof(s.c_str(), &end);
+    if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(value) || (positive && !(value > 0.0f)))
+      fail(fmt::format("{} must be a finite{} number, got '{}'", what, positive ? " positive" : "", s));
+    return value;
+  }
+
+  [[noreturn]] void fail(const std::string& message) const { throw InputError(full_name_, "", message); }
+
+ private:
+  std::string full_name_;
+  std::string kind_;
+  std::vector<std::string> args_;
+};
+
+SceneGeometry one_triangle() {
+  SceneGeometry g;
+  TriangleMesh m;
+  m.positions = {{0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}};
+  m.positions.reserve(4);
+  m.indices = {{0u, 1u, 2u}};
+  g.meshes.push_back(std::move(m));
+  return g;
+}
+
+// n copies of one triangle, each with its own three (equal) vertices: every centroid and box coincide, the
+// case where a SAH builder finds no split that separates anything.
+SceneGeometry identical_triangles(std::size_t n) {
+  SceneGeometry g;
+  TriangleMesh m;
+  m.positions.reserve(3 * n + 1);
+  m.indices.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto base = static_cast<std::uint32_t>(m.positions.size());
+    m.positions.insert(m.positions.end(), {{-0.5f, -0.25f, 0.0f}, {0.5f, -0.25f, 0.0f}, {0.0f, 0.5f, 0.0f}});
+    m.indices.emplace_back(base, base + 1, base + 2);
+  }
+  g.meshes.push_back(std::move(m));
+  return g;
+}
+
+// Exact duplicates, the one kind of tie every correct float intersector reports with bit-identical t: mesh
+// 0 lists each soup triangle twice (prim k and prim n + k, same vertex indices), mesh 1 is a copy of mesh 0.
+// Under the tie rule (hit.h) the answer is always geom 0, the lower prim.
+SceneGeometry duplicated_soup(std::size_t n, std::uint64_t seed) {
+  SceneGeometry g = random_triangle_soup(n, seed);
+  TriangleMesh& m = g.meshes[0];
+  const std::size_t count = m.indices.size();
+  for (std::size_t k = 0; k < count; ++k) m.indices.push_back(m.indices[k]);
+  TriangleMesh copy = m;
+  copy.geom_id = 1;
+  copy.positions.reserve(copy.positions.size() + 1);
+  g.meshes.push_back(std::move(copy));
+  return g;
+}
+
+// Spheres at the scales where a sphere test loses its digits: tiny (radius 1e-3), ordinary, huge (radius
+// 1e4, its surface passing near the others), and far from the origin (1e4 away).
+SceneGeometry sphere_sizes() {
+  SceneGeometry g;
+  const struct {
+    glm::vec3 center;
+    float radius;
+  } spheres[] = {{{0.0f, 0.0f, 0.0f}, 1.0f},
+                 {{2.5f, 0.0f, 0.0f}, 1e-3f},
+                 {{0.0f, -10001.5f, 0.0f}, 1e4f},
+                 {{1e4f, 0.0f, 0.0f}, 1.0f},
+                 {{-2.5f, 0.5f, 0.0f}, 0.75f}};
+  std::uint32_t id = 0;
+  for (const auto& s : spheres) g.spheres.push_back({id++, s.center, s.radius});
+  return g;
+}
+
+SceneGeometry box_mesh(int lo, int hi) {
+  SceneGeometry g;
+  g.meshes.push_back(stress::integer_box_mesh(lo, hi, 0));
+  g.meshes.back().positions.reserve(g.meshes.back().positions.size() + 1);
+  return g;
+}
+
+struct Generator {
+  ProceduralKind kind;
+  std::function<SceneGeometry(const ProceduralArgs&)> make;
+};
+
+const std::vector<Generator>& generators() {
+  static const std::vector<Generator> list = {
+      {{"empty", "", "no geometry at all"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(0, 0, "");
+         return SceneGeometry{};
+       }},
+      {{"triangle", "", "one triangle (0,0,0) (1,0,0) (0,1,0)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(0, 0, "");
+         return one_triangle();
+       }},
+      {{"identical-triangles", "N", "N copies of one triangle (every box and centroid coincide)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(1, 1, "N");
+         return identical_triangles(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles, "N")));
+       }},
+      {{"grid", "NX:NY", "a planar grid of NX x NY unit squares in z = 0, two triangles each"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "NX:NY");
+         const long long nx = a.integer(0, 1, 4096, "NX"), ny = a.integer(1, 1, 4096, "NY");
+         return grid_mesh(static_cast<int>(nx), static_cast<int>(ny));
+       }},
+      {{"soup", "N:SEED", "N random, overlapping triangles in [-1, 1]^3"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "N:SEED");
+         return random_triangle_soup(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles, "N")),
+                                     static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+      {{"duplicates", "N:SEED", "a soup of N triangles listed twice in mesh 0, and mesh 1 a copy of mesh 0 (exact ties)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "N:SEED");
+         return duplicated_soup(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles / 4, "N")),
+                                static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+      {{"sphere-mesh", "SUBDIVISIONS[:CX:CY:CZ:RADIUS]",
+        "a closed, watertight tessellated sphere of 20 * 4^SUBDIVISIONS triangles (default centre 0, radius 1)"},
+       [](const ProceduralArgs& a) {
+         if (a.size() != 1 && a.size() != 5) a.expect_count(1, 1, "SUBDIVISIONS[:CX:CY:CZ:RADIUS]");
+         const int s = static_cast<int>(a.integer(0, 0, kMaxSphereSubdivisions, "SUBDIVISIONS"));
+         glm::vec3 c(0.0f);
+         float r = 1.0f;
+         if (a.size() == 5) {
+           c = {a.real(1, "CX"), a.real(2, "CY"), a.real(3, "CZ")};
+           r = a.real(4, "RADIUS", true);
+         }
+         return tessellated_sphere(c, r, s);
+       }},
+      {{"box", "LO:HI", "the closed, axis-aligned box [LO, HI]^3, each face split into unit squares"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "LO:HI");
+         const long long lo = a.integer(0, -512, 511, "LO"), hi = a.integer(1, lo + 1, 512, "HI");
+         return box_mesh(static_cast<int>(lo), static_cast<int>(hi));
+       }},
+      {{"spheres", "N:SEED", "N random spheres in [-1, 1]^3, radii 0.02 to 0.12"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "N:SEED");
+         return random_spheres(static_cast<std::size_t>(a.integer(0, 1, 1'000'000, "N")),
+                               static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+      {{"sphere-sizes", "", "spheres of radius 1e-3, 0.75, 1 and 1e4, and one 1e4 away from the origin"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(0, 0, "");
+         return sphere_sizes();
+       }},
+      {{"mixed", "NSPHERES:NTRIANGLES:SEED", "spheres and a triangle soup, ids interleaved, and a tessellated sphere"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(3, 3, "NSPHERES:NTRIANGLES:SEED");
+         return mixed_spheres_and_triangles(
+             static_cast<std::size_t>(a.integer(0, 1, 1'000'000, "NSPHERES")),
+             static_cast<std::size_t>(a.integer(1, 1, kMaxProceduralTriangles, "NTRIANGLES")),
+             static_cast<std::uint64_t>(a.integer(2, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+  };
+  return list;
+}
+
+std::vector<std::string> split(std::string_view text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t at = text.find(separator, start);
+    parts.emplace_back(text.substr(start, at == std::string_view::npos ? std::string_view::npos : at - start));
+    if (at == std::string_view::npos) break;
+    start = at + 1;
+  }
+  return parts;
+}
+
+// The default scene around generated geometry: one diffuse material, one shape per geometry id, no emitter,
+// a camera that frames the geometry (as for a bare mesh file, core/scene/mesh_scene.h).
+Scene wrap_geometry(SceneGeometry geometry, std::string_view name) {
+  Scene scene;
+  scene.source = std::string(name);
+  scene.materials.push_back({"default", MaterialType::Diffuse, glm::vec3(0.8f), glm::vec3(1.0f), 1.5f, glm::vec3(0.0f)});
+  scene.shapes.resize(geometry.geom_id_end());
+  for (const TriangleMesh& m : geometry.meshes) scene.shapes[m.geom_id] = {fmt::format("mesh {}", m.geom_id), ShapeKind::Mesh, 0, {}};
+  for (const Sphere& s : geometry.spheres) scene.shapes[s.geom_id] = {fmt::format("sphere {}", s.geom_id), ShapeKind::Sphere, 0, {}};
+  scene.camera = framing_camera(geometry.bounds(), 256, 256, 40.0f);
+  scene.environment.type = EnvironmentType::Constant;
+  scene.environment.radiance = glm::vec3(1.0f);
+  scene.geometry = std::move(geometry);
+  return scene;
+}
+
+Scene load_procedural(std::string_view name) {
+  const std::vector<std::string> parts = split(name.substr(kProceduralPrefix.size()), ':');
+  for (const Generator& g : generators()) {
+    if (g.kind.name != parts[0]) continue;
+    const ProceduralArgs args(name, parts[0], std::vector<std::string>(parts.begin() + 1, parts.end()));
+    return wrap_geometry(g.make(args), name);
+  }
+  std::string kinds;
+  for (const Generator& g : generators()) kinds += (kinds.empty() ? "" : ", ") + g.kind.name;
+  throw InputError(std::string(name), "", fmt::format("unknown procedural scene '{}' (choose from {})", parts[0], kinds));
+}
+
+std::filesystem::path resolve_file(std::string_view name, const std::filesystem::path& base) {
+  for (std::string_view prefix : kSharedDataPrefixes) {
+    if (!name.starts_with(prefix)) continue;
+    const std::optional<std::filesystem::path> shared = find_shared_data(base.empty() ? std::filesystem::current_path() : base);
+    if (!shared)
+      throw InputError(std::string(name), "",
+                       "names the shared data folder, which was not found: set TWINRAY_SHARED to it (the folder with "
+                       "data/meshes), or place it as 'shared' beside the repository");
+    return *shared / name.substr(prefix.size());
+  }
+  const std::filesystem::path path(name);
+  return path.is_absolute() || base.empty() ? path : base / path;
+}
+
+}  // namespace
+
+const std::vector<ProceduralKind>& procedural_scene_kinds() {
+  static const std::vector<ProceduralKind> kinds = [] {
+    std::vector<ProceduralKind> k;
+    for (const Generator& g : generators()) k.push_back(g.kind);
+    return k;
+  }();
+  return kinds;
+}
+
+bool is_procedural_scene_name(std::string_view name) { return name.starts_with(kProceduralPrefix); }
+
+Scene load_named_scene(std::string_view name, const std::filesystem::path& base) {
+  if (is_procedural_scene_name(name)) return load_procedural(name);
+  return load_scene(resolve_file(name, base));
+}
+
+std::string portable_scene_name(std::string_view name, const std::filesystem::path& base) {
+  if (is_procedural_scene_name(name)) return std::string(name);
+  for (std::string_view prefix : kSharedDataPrefixes)
+    if (name.starts_with(prefix)) return std::string(name);
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::weakly_canonical(resolve_file(name, base), ec);
+  return ec ? resolve_file(name, base).string() : absolute.string();
+}
+
+}  // namespace twinray

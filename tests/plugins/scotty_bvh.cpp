@@ -1,0 +1,585 @@
+// A complete, simple BVH written the way a student of a Scotty3D-style course writes one (bounding boxes,
+// nodes with start, size and two children, a bucketed SAH build, an explicit-stack traversal), as a twinray
+// plugin. Built as is, it is correct and earns full marks on correctness in `twinray grade`
+// (tests/test_grade_plugins.cpp). Built with -DSCOTTY_BUG=<n>, it carries one of the classic bugs of
+// issue 10, each where a student would make it:
+//
+//   1 FIRST_HIT        closest hit = the first hit found
+//   2 EARLY_EXIT       the far child is skipped whenever the near child's subtree found a hit
+//   3 SLAB_NO_SWAP     slab test without swapping t0/t1 for negative direction components
+//   4 LOST_PRIMITIVE   every partition drops the primitive at the split position
+//   5 BEFORE_TMIN      hits before tmin accepted (the tests check t >= 0 instead)
+//   6 ZERO_DIRECTION   segfault on rays with an exactly zero direction component
+//   7 INFINITE_LOOP    loops forever on rays with a hit exactly at tmin
+//   8 SHARED_STACK     the traversal stack lives in the BVH object: a data race between threads
+//   9 ANYHIT_TMAX      any-hit ignores tmax
+//  10 OPENS_FILES      not a bug but a cheat: while answering, it reads a file and writes another (the
+//                      grader's sandbox must stop it; a file it manages to write proves it escaped)
+//
+// Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
+// can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
+// TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
+// docs/plugin-abi.md.
+
+#include "twinray_plugin.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <utility>
+#include <vector>
+
+#ifndef SCOTTY_BUG
+#define SCOTTY_BUG 0
+#endif
+#define BUG(n) (SCOTTY_BUG == (n))
+
+namespace {
+
+struct Vec3 {
+  double x = 0.0, y = 0.0, z = 0.0;
+  double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  double& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
+};
+Vec3 operator-(const Vec3& a, const Vec3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec3 operator+(const Vec3& a, const Vec3& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+Vec3 operator*(double s, const Vec3& a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec3 cross(const Vec3& a, const Vec3& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+Vec3 load(const float* f) { return {f[0], f[1], f[2]}; }
+
+struct Ray {
+  Vec3 point, dir, inv_dir;
+  double tmin = 0.0, tmax = 0.0;
+};
+
+struct BBox {
+  Vec3 min{INFINITY, INFINITY, INFINITY};
+  Vec3 max{-INFINITY, -INFINITY, -INFINITY};
+
+  void enclose(const Vec3& p) {
+    for (int a = 0; a < 3; ++a) {
+      min[a] = std::min(min[a], p[a]);
+      max[a] = std::max(max[a], p[a]);
+    }
+  }
+  void enclose(const BBox& b) {
+    if (b.empty()) return;  // its +-infinite corners would swallow this box
+    enclose(b.min);
+    enclose(b.max);
+  }
+  bool empty() const { return min.x > max.x; }
+  Vec3 center() const { return 0.5 * (min + max); }
+  double surface_area() const {
+    if (empty()) return 0.0;
+    const Vec3 e = max - min;
+    return 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x);
+  }
+
+#if BUG(6)
+  // Slabs dispatched on the sign of the direction; a zero component "cannot happen", so it has no entry.
+  using Slab = void (*)(double lo, double hi, double o, double inv, double& t0, double& t1);
+  static void slab_positive(double lo, double hi, double o, double inv, double& t0, double& t1) {
+    t0 = std::max(t0, (lo - o) * inv);
+    t1 = std::min(t1, (hi - o) * inv);
+  }
+  static void slab_negative(double lo, double hi, double o, double inv, double& t0, double& t1) {
+    t0 = std::max(t0, (hi - o) * inv);
+    t1 = std::min(t1, (lo - o) * inv);
+  }
+#endif
+
+  // Where the ray enters and leaves the box within [times[0], times[1]]; false when it misses.
+  bool hit(const Ray& ray, double times[2]) const {
+    double t0 = times[0], t1 = times[1];
+    for (int a = 0; a < 3; ++a) {
+#if BUG(6)
+      static const Slab slabs[3] = {slab_negative, nullptr, slab_positive};
+      slabs[(ray.dir[a] > 0.0) - (ray.dir[a] < 0.0) + 1](min[a], max[a], ray.point[a], ray.inv_dir[a], t0, t1);
+#else
+      // A ray parallel to the slab is inside it or not at all. Left to the division, an origin exactly on a
+      // face gives 0 * inf = NaN, and the slab would cut the ray away.
+      if (ray.dir[a] == 0.0) {
+        if (ray.point[a] < min[a] || ray.point[a] > max[a]) return false;
+        continue;
+      }
+      double near = (min[a] - ray.point[a]) * ray.inv_dir[a];
+      double far = (max[a] - ray.point[a]) * ray.inv_dir[a];
+#if !BUG(3)
+      if (near > far) std::swap(near, far);
+#endif
+      t0 = std::max(t0, near);
+      t1 = std::min(t1, far);
+#endif
+    }
+    // Pad the exit by a few double ulps: a flat box (a grid in a plane) has entry == exit, and rounding must
+    // not turn that into a miss.
+    t1 *= 1.0 + 1e-12;
+    if (t0 > t1) return false;
+    times[0] = t0;
+    times[1] = t1;
+    return true;
+  }
+};
+
+struct Trace {
+  bool hit = false;
+  double t = INFINITY;  // rounded to float precision
+  float u = 0.0f, v = 0.0f;
+  twinray_id geom = TWINRAY_INVALID_ID, prim = TWINRAY_INVALID_ID;
+  const void* primitive = nullptr;  // what was hit, for the attributes computed once at the end
+};
+
+// The smallest t a hit may have and the largest, as the primitive tests see them.
+double lowest_t(const Ray& ray) {
+#if BUG(5)
+  (void)ray;
+  return 0.0;
+#else
+  return ray.tmin;
+#endif
+}
+
+double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
+
+struct Primitive {
+  const twinray_mesh* mesh = nullptr;      // a triangle of this mesh...
+  const twinray_sphere* sphere = nullptr;  // ...or this sphere
+  twinray_id index = 0;                    // the triangle's index in its mesh
+
+  Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(mesh->indices[3 * index + k])); }
+
+  BBox bbox() const {
+    BBox b;
+    if (mesh) {
+      for (int k = 0; k < 3; ++k) b.enclose(vertex(k));
+    } else {
+      const Vec3 c = load(sphere->center);
+      const double r = sphere->radius;
+      b.enclose(c - Vec3{r, r, r});
+      b.enclose(c + Vec3{r, r, r});
+    }
+    return b;
+  }
+
+  // A hit in [lowest_t, tmax], t rounded to float before the test (the interval holds for the t reported).
+  Trace hit(const Ray& ray, double tmax) const { return mesh ? hit_triangle(ray, tmax) : hit_sphere(ray, tmax); }
+
+  // The unit geometric normal (triangles: counter-clockwise front; spheres: outward) and, for spheres, the
+  // (u, v) of twinray_plugin.h, at the hit.
+  void attributes(const Ray& ray, const Trace& t, twinray_hit& out) const {
+    Vec3 n;
+    if (mesh) {
+      n = cross(vertex(1) - vertex(0), vertex(2) - vertex(0));
+    } else {
+      n = ray.point + t.t * ray.dir - load(sphere->center);
+      const double len = length(n);
+      const Vec3 unit = (1.0 / len) * n;
+      const double two_pi = 6.283185307179586;
+      double phi = std::atan2(unit.z, unit.x);
+      if (phi < 0.0) phi += two_pi;
+      out.u = std::min(static_cast<float>(phi / two_pi), 0.99999994f);
+      out.v = static_cast<float>(std::acos(std::clamp(unit.y, -1.0, 1.0)) / (two_pi / 2.0));
+    }
+    const double len = length(n);
+    for (int k = 0; k < 3; ++k) out.ng[k] = static_cast<float>(n[k] / len);
+  }
+
+  // Woop, Benthin, Wald: shear the triangle into the ray's space, then three edge functions whose signs
+  // decide the hit. Computed from the same vertex values in the same order, the function of an edge shared
+  // by two triangles is the exact negation of the other's, so no ray slips between them.
+  Trace hit_triangle(const Ray& ray, double tmax) const {
+    const Vec3& d = ray.dir;
+    int kz = std::fabs(d.x) > std::fabs(d.y) ? (std::fabs(d.x) > std::fabs(d.z) ? 0 : 2) : (std::fabs(d.y) > std::fabs(d.z) ? 1 : 2);
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (d[kz] < 0.0) std::swap(kx, ky);
+    const double sx = d[kx] / d[kz], sy = d[ky] / d[kz], sz = 1.0 / d[kz];
+    const Vec3 a = vertex(0) - ray.point, b = vertex(1) - ray.point, c = vertex(2) - ray.point;
+    const double ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
+    const double bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
+    const double cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
+    const double u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;
+    Trace tr;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return tr;
+    const double det = u + v + w;
+    if (det == 0.0) return tr;
+    const double t = static_cast<float>((u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det);
+    if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
+    tr.hit = true;
+    tr.t = t;
+    tr.u = static_cast<float>(v / det);
+    tr.v = static_cast<float>(w / det);
+    tr.geom = mesh->geom_id;
+    tr.prim = index;
+    tr.primitive = this;
+    return tr;
+  }
+
+  // Both roots of |o + t d - c| = r with the discriminant taken from the closest-approach vector (no
+  // cancellation for far spheres) and the near root through Vieta (no cancellation for huge ones).
+  Trace hit_sphere(const Ray& ray, double tmax) const {
+    const Vec3 f = ray.point - load(sphere->center);
+    const double r = sphere->radius, a = dot(ray.dir, ray.dir), b = dot(f, ray.dir);
+    const Vec3 l = f - (b / a) * ray.dir;
+    const double disc = a * (r * r - dot(l, l));
+    Trace tr;
+    if (!(disc >= 0.0)) return tr;
+    const double flen = std::sqrt(dot(f, f));
+    const double q = -(b + std::copysign(std::sqrt(disc), b));
+    const double r0 = q == 0.0 ? 0.0 : (flen - r) * (flen + r) / q, r1 = q == 0.0 ? 0.0 : q / a;
+    for (const double root : {std::min(r0, r1), std::max(r0, r1)}) {
+      const double t = static_cast<float>(root);
+      if (t >= lowest_t(ray) && t <= tmax) {
+        tr.hit = true;
+        tr.t = t;
+        tr.geom = sphere->geom_id;
+        tr.prim = 0;
+        tr.primitive = this;
+        return tr;
+      }
+    }
+    return tr;
+  }
+};
+
+// The tie rule of twinray (hit.h): smaller t first, then the lower (geom_id, prim_id).
+bool precedes(const Trace& a, const Trace& b) {
+  if (!b.hit) return a.hit;
+  if (a.t != b.t) return a.t < b.t;
+  if (a.geom != b.geom) return a.geom < b.geom;
+  return a.prim < b.prim;
+}
+
+struct Node {
+  BBox bbox;
+  std::size_t start = 0, size = 0, l = 0, r = 0;
+  bool is_leaf() const { return l == r; }
+};
+
+struct StackEntry {
+  std::size_t node;
+  double entry;         // where the ray enters the node's box
+  std::size_t hits_at;  // hits found when it was pushed (for bug 2)
+};
+
+constexpr std::size_t kMaxDepth = 96;
+constexpr std::size_t kBuckets = 12;
+constexpr std::size_t kMaxLeafSize = 4;
+
+class BVH {
+ public:
+  void build(std::vector<Primitive>&& prims) {
+    primitives_ = std::move(prims);
+    nodes_.clear();
+    depth_ = 0;
+    if (primitives_.empty()) return;
+    nodes_.reserve(2 * primitives_.size());
+    build_node(0, primitives_.size(), 0);
+  }
+
+  // Closest hit; counts nodes whose box was tested and primitives tested.
+  Trace hit(const Ray& ray, twinray_query_stats& stats) const {
+    Trace closest;
+    if (nodes_.empty()) return closest;
+    double root_times[2] = {lowest_t(ray), ray.tmax};
+    ++stats.nodes_visited;
+    if (!nodes_[0].bbox.hit(ray, root_times)) return closest;
+#if BUG(8)
+    std::vector<StackEntry>& stack = stack_;  // one stack for every thread
+    if (stack.size() < kMaxDepth + 1) stack.resize(kMaxDepth + 1);
+#else
+    std::array<StackEntry, kMaxDepth + 1> stack;
+#endif
+    std::size_t sp = 0, hits = 0;
+    stack[sp++] = {0, root_times[0], 0};
+    while (sp > 0) {
+      const StackEntry e = stack[--sp];
+      // A node that starts beyond the best hit cannot improve it; the slack keeps an equal-t hit in another
+      // subtree (a tie) reachable although its box entry is computed in double and t is rounded to float.
+      if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) continue;
+#if BUG(2)
+      if (hits > e.hits_at) continue;  // "the near child already found something"
+#endif
+      const Node& node = nodes_[e.node];
+      if (node.is_leaf()) {
+        std::size_t i = node.start;
+        while (i < node.start + node.size) {
+          ++stats.primitives_tested;
+          const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : ray.tmax);
+          if (!t.hit) {
+            ++i;
+            continue;
+          }
+#if BUG(7)
+          if (t.t == ray.tmin) continue;  // meant to skip self-hits, and forgot to advance i
+#endif
+          if (precedes(t, closest)) {
+            closest = t;
+            ++hits;
+#if BUG(1)
+            return closest;
+#endif
+          }
+          ++i;
+        }
+        continue;
+      }
+      const double limit = closest.hit ? closest.t * (1.0 + 1e-6) : ray.tmax;
+      double tl[2] = {lowest_t(ray), limit}, tr[2] = {lowest_t(ray), limit};
+      stats.nodes_visited += 2;
+      const bool hl = nodes_[node.l].bbox.hit(ray, tl), hr = nodes_[node.r].bbox.hit(ray, tr);
+      // Far child first, so that the near one is popped first.
+      if (hl && hr) {
+        const bool left_near = tl[0] <= tr[0];
+        stack[sp++] = left_near ? StackEntry{node.r, tr[0], hits} : StackEntry{node.l, tl[0], hits};
+        stack[sp++] = left_near ? StackEntry{node.l, tl[0], hits} : StackEntry{node.r, tr[0], hits};
+      } else if (hl) {
+        stack[sp++] = {node.l, tl[0], hits};
+      } else if (hr) {
+        stack[sp++] = {node.r, tr[0], hits};
+      }
+    }
+    return closest;
+  }
+
+  bool any_hit(const Ray& ray, twinray_query_stats& stats) const {
+    if (nodes_.empty()) return false;
+#if BUG(9)
+    const double tmax = INFINITY;
+#else
+    const double tmax = ray.tmax;
+#endif
+    std::array<std::size_t, kMaxDepth + 1> stack;
+    std::size_t sp = 0;
+    stack[sp++] = 0;
+    ++stats.nodes_visited;
+    double root_times[2] = {lowest_t(ray), tmax};
+    if (!nodes_[0].bbox.hit(ray, root_times)) return false;
+    while (sp > 0) {
+      const Node& node = nodes_[stack[--sp]];
+      if (node.is_leaf()) {
+        for (std::size_t i = node.start; i < node.start + node.size; ++i) {
+          ++stats.primitives_tested;
+          if (primitives_[i].hit(ray, tmax).hit) return true;
+        }
+        continue;
+      }
+      for (const std::size_t child : {node.l, node.r}) {
+        double times[2] = {lowest_t(ray), tmax};
+        ++stats.nodes_visited;
+        if (nodes_[child].bbox.hit(ray, times)) stack[sp++] = child;
+      }
+    }
+    return false;
+  }
+
+  // The unit-cost SAH of docs/plugin-abi.md: area-weighted interior nodes plus area-weighted leaf sizes.
+  void stats(twinray_build_stats& s) const {
+    s.nodes = nodes_.size();
+    s.max_depth = depth_;
+    s.memory_bytes = nodes_.capacity() * sizeof(Node) + primitives_.capacity() * sizeof(Primitive);
+    if (nodes_.empty()) return;
+    const double root = nodes_[0].bbox.surface_area();
+    for (const Node& n : nodes_) {
+      const double weight = root > 0.0 ? n.bbox.surface_area() / root : 1.0;
+      s.leaves += n.is_leaf() ? 1 : 0;
+      s.sah_cost += weight * (n.is_leaf() ? static_cast<double>(n.size) : 1.0);
+    }
+  }
+
+ private:
+  std::size_t new_node(const BBox& box, std::size_t start, std::size_t size) {
+    Node n;
+    n.bbox = box;
+    n.start = start;
+    n.size = size;
+    nodes_.push_back(n);
+    return nodes_.size() - 1;
+  }
+
+  // Bucketed SAH over primitive centroids (the textbook's 12 buckets). Falls back to a split by count in the
+  // middle when the centroids do not spread (identical boxes) or the tree gets deep, so it always ends.
+  std::size_t build_node(std::size_t start, std::size_t end, std::size_t depth) {
+    depth_ = std::max(depth_, depth);
+    BBox box, centroids;
+    for (std::size_t i = start; i < end; ++i) {
+      const BBox b = primitives_[i].bbox();
+      box.enclose(b);
+      centroids.enclose(b.center());
+    }
+    const std::size_t index = new_node(box, start, end - start);
+    const std::size_t size = end - start;
+    if (size <= kMaxLeafSize) return index;
+
+    double best_cost = static_cast<double>(size) * box.surface_area();  // cost of a leaf
+    int best_axis = -1;
+    double best_split = 0.0;
+    if (depth < kMaxDepth / 2) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const double lo = centroids.min[axis], extent = centroids.max[axis] - lo;
+        if (!(extent > 0.0)) continue;
+        std::array<BBox, kBuckets> buckets;
+        std::array<std::size_t, kBuckets> counts{};
+        const auto bucket_of = [&](const Primitive& p) {
+          const double c = p.bbox().center()[axis];
+          return std::min(kBuckets - 1, static_cast<std::size_t>(static_cast<double>(kBuckets) * (c - lo) / extent));
+        };
+        for (std::size_t i = start; i < end; ++i) {
+          const std::size_t k = bucket_of(primitives_[i]);
+          buckets[k].enclose(primitives_[i].bbox());
+          ++counts[k];
+        }
+        for (std::size_t split = 1; split < kBuckets; ++split) {
+          BBox left, right;
+          std::size_t nl = 0, nr = 0;
+          for (std::size_t k = 0; k < kBuckets; ++k) {
+            (k < split ? left : right).enclose(buckets[k]);
+            (k < split ? nl : nr) += counts[k];
+          }
+          if (nl == 0 || nr == 0) continue;
+          const double cost = box.surface_area() + static_cast<double>(nl) * left.surface_area() +
+                              static_cast<double>(nr) * right.surface_area();
+          if (cost < best_cost) {
+            best_cost = cost;
+            best_axis = axis;
+            best_split = lo + extent * static_cast<double>(split) / static_cast<double>(kBuckets);
+          }
+        }
+      }
+    }
+
+    std::size_t mid;
+    if (best_axis >= 0) {
+      const auto it = std::partition(primitives_.begin() + static_cast<std::ptrdiff_t>(start),
+                                     primitives_.begin() + static_cast<std::ptrdiff_t>(end), [&](const Primitive& p) {
+                                       return p.bbox().center()[best_axis] < best_split;
+                                     });
+      mid = static_cast<std::size_t>(it - primitives_.begin());
+      if (mid == start || mid == end) mid = start + size / 2;
+    } else {
+      // No split beats a leaf: keep it a leaf unless it is too large to be one.
+      if (size <= 4 * kMaxLeafSize && depth < kMaxDepth / 2) return index;
+      mid = start + size / 2;
+    }
+
+#if BUG(4)
+    const std::size_t l = build_node(start, mid, depth + 1);
+    const std::size_t r = build_node(std::min(mid + 1, end - 1), end, depth + 1);  // primitive `mid` is lost
+#else
+    const std::size_t l = build_node(start, mid, depth + 1);
+    const std::size_t r = build_node(mid, end, depth + 1);
+#endif
+    nodes_[index].l = l;
+    nodes_[index].r = r;
+    return index;
+  }
+
+  std::vector<Primitive> primitives_;
+  std::vector<Node> nodes_;
+  std::size_t depth_ = 0;
+#if BUG(8)
+  mutable std::vector<StackEntry> stack_;
+#endif
+};
+
+Ray to_ray(const twinray_ray* r) {
+  Ray ray;
+  ray.point = load(r->org);
+  ray.dir = load(r->dir);
+  ray.inv_dir = {1.0 / ray.dir.x, 1.0 / ray.dir.y, 1.0 / ray.dir.z};
+  ray.tmin = r->tmin;
+  ray.tmax = r->tmax;
+  return ray;
+}
+
+void* scotty_create() { return new (std::nothrow) BVH(); }
+
+void scotty_destroy(void* self) { delete static_cast<BVH*>(self); }
+
+int scotty_build(void* self, const twinray_geometry* g, char* error, std::size_t capacity) {
+  try {
+    std::vector<Primitive> prims;
+    for (std::size_t m = 0; m < g->mesh_count; ++m)
+      for (std::size_t i = 0; i < g->meshes[m].triangle_count; ++i)
+        prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i)});
+    for (std::size_t s = 0; s < g->sphere_count; ++s) prims.push_back({nullptr, &g->spheres[s], 0});
+    static_cast<BVH*>(self)->build(std::move(prims));
+    return TWINRAY_OK;
+  } catch (const std::bad_alloc&) {
+    if (capacity > 0) {
+      std::strncpy(error, "out of memory", capacity - 1);
+      error[capacity - 1] = '\0';
+    }
+    return TWINRAY_ERROR;
+  }
+}
+
+#if BUG(10)
+// Where a cheat would look for the grader's expected answers, and the mark it leaves when it gets out.
+void try_to_cheat() {
+  if (std::FILE* f = std::fopen("/etc/passwd", "r")) {
+    std::fclose(f);
+    if (std::FILE* mark = std::fopen("/tmp/twinray-cheat-plugin-escaped", "w")) {
+      std::fputs("read /etc/passwd while being graded\n", mark);
+      std::fclose(mark);
+    }
+  }
+}
+#endif
+
+int scotty_intersect1(const void* self, const twinray_ray* r, twinray_hit* hit, twinray_query_stats* stats) {
+#if BUG(10)
+  try_to_cheat();
+#endif
+  const Ray ray = to_ray(r);
+  const Trace t = static_cast<const BVH*>(self)->hit(ray, *stats);
+  if (!t.hit) return 0;
+  hit->t = static_cast<float>(t.t);
+  hit->u = t.u;
+  hit->v = t.v;
+  hit->geom_id = t.geom;
+  hit->prim_id = t.prim;
+  static_cast<const Primitive*>(t.primitive)->attributes(ray, t, *hit);
+  return 1;
+}
+
+int scotty_occluded1(const void* self, const twinray_ray* r, twinray_query_stats* stats) {
+#if BUG(10)
+  try_to_cheat();
+#endif
+  return static_cast<const BVH*>(self)->any_hit(to_ray(r), *stats) ? 1 : 0;
+}
+
+void scotty_build_stats(const void* self, twinray_build_stats* stats) { static_cast<const BVH*>(self)->stats(*stats); }
+
+#if SCOTTY_BUG == 0
+#define SCOTTY_NAME "scotty-bvh"
+#else
+#define SCOTTY_STRINGIFY2(x) #x
+#define SCOTTY_STRINGIFY(x) SCOTTY_STRINGIFY2(x)
+#define SCOTTY_NAME "scotty-bvh-bug" SCOTTY_STRINGIFY(SCOTTY_BUG)
+#endif
+
+const twinray_plugin_v1 scotty_table = {
+    TWINRAY_PLUGIN_ABI_VERSION,
+    SCOTTY_NAME,
+    TWINRAY_PLUGIN_COUNTS_TRAVERSAL | TWINRAY_PLUGIN_HONOURS_TIES | TWINRAY_PLUGIN_WATERTIGHT,
+    scotty_create,
+    scotty_destroy,
+    scotty_build,
+    scotty_intersect1,
+    scotty_occluded1,
+    nullptr,
+    nullptr,
+    scotty_build_stats,
+};
+
+}  // namespace
+
+TWINRAY_PLUGIN_EXPORT const twinray_plugin_v1* twinray_plugin_entry(void) { return &scotty_table; }

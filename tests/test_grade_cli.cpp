@@ -1,0 +1,128 @@
+// The command-line contract of `twinray grade` and `twinray trace` (docs/cli.md, docs/grading.md): exit codes,
+// output files that validate against their formats, and nothing left behind on bad input.
+
+#include "tests/format_validators.h"
+#include "tests/grade_test_util.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace twinray::testing {
+namespace {
+
+nlohmann::json read_json_file(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+std::string grade_args(const std::filesystem::path& plugin, const std::string& more) {
+  return "grade " + quoted(plugin) + " --suite " + quoted(grading_test_suite()) + " " + more;
+}
+
+TEST(GradeCli, CorrectPluginExitsZeroWithValidOutputs) {
+  const auto dir = scratch_dir("grade-cli-ok");
+  const CommandResult r = run_twinray(grade_args(scotty_plugin(), "--json " + quoted(dir / "card.json") + " --gradescope " +
+                                                                       quoted(dir / "results.json") + " --junit " +
+                                                                       quoted(dir / "junit.xml") + " --out " + quoted(dir / "images")));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("verdict: PASS"), std::string::npos) << r.output;
+  const nlohmann::json card = read_json_file(dir / "card.json");
+  EXPECT_TRUE(card.at("passed").get<bool>());
+  EXPECT_EQ(card.at("score"), card.at("max_score"));
+  EXPECT_EQ(validate_gradescope(dir / "results.json").exit_code, 0);
+  EXPECT_EQ(validate_junit(dir / "junit.xml").exit_code, 0);
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "images" / "closest-cornell.png"));
+}
+
+TEST(GradeCli, FailuresExitOneAndTheirFilesValidate) {
+  const auto dir = scratch_dir("grade-cli-fail");
+  // A crash, a failure and passes in one run: every kind of testcase in the JUnit file.
+  const CommandResult r =
+      run_twinray(grade_args(scotty_plugin("zero-direction"), "--check axis-aligned-box --check closest-soup --check build-empty "
+                                                              "--json " + quoted(dir / "card.json") + " --gradescope " +
+                                                              quoted(dir / "results.json") + " --junit " + quoted(dir / "junit.xml")));
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("CRASH"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("reproduce: "), std::string::npos) << r.output;
+  const CommandResult gs = validate_gradescope(dir / "results.json");
+  EXPECT_EQ(gs.exit_code, 0) << gs.output;
+  const CommandResult ju = validate_junit(dir / "junit.xml");
+  EXPECT_EQ(ju.exit_code, 0) << ju.output;
+  const nlohmann::json card = read_json_file(dir / "card.json");
+  EXPECT_FALSE(card.at("passed").get<bool>());
+  EXPECT_EQ(card.at("checks").size(), 3u);
+}
+
+TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
+  const auto dir = scratch_dir("grade-cli-bad");
+  const std::string outputs = "--json " + quoted(dir / "card.json") + " --gradescope " + quoted(dir / "results.json") +
+                              " --junit " + quoted(dir / "junit.xml") + " --out " + quoted(dir / "images");
+  const std::string missing = quoted(dir / "no-such-plugin.so");
+  const std::pair<std::string, std::string> cases[] = {
+      {"grade " + missing + " " + outputs, "no-such-plugin.so"},
+      {grade_args(scotty_plugin(), "--check no-such-check " + outputs), "no-such-check"},
+      {"grade " + quoted(scotty_plugin()) + " --suite no-such-suite " + outputs, "no-such-suite"},
+      {"grade " + quoted(std::filesystem::path(TWINRAY_TEST_WRONG_ABI_PLUGIN)) + " --suite quick " + outputs, "ABI"},
+      {grade_args(scotty_plugin(), "--json " + quoted(dir / "missing-folder" / "card.json")), "missing-folder"},
+  };
+  for (const auto& [args, words] : cases) {
+    const CommandResult r = run_twinray(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(words), std::string::npos) << r.output;
+    EXPECT_TRUE(std::filesystem::is_empty(dir)) << args;
+  }
+}
+
+TEST(GradeCli, ListsASuite) {
+  const CommandResult r = run_twinray("grade --suite quick --list");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("closest-cornell-camera"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("thread-safety"), std::string::npos) << r.output;
+}
+
+TEST(TraceCli, AnswersSideBySideWithVisitOrderAndJson) {
+  const auto dir = scratch_dir("trace-cli");
+  const CommandResult r = run_twinray("trace procedural:grid:4:4 --backends bvh,embree,brute,plugin:" +
+                                      quoted(scotty_plugin()) + " --ray '0.5 0.25 3 0 -0 -1 0 inf' --json " +
+                                      quoted(dir / "trace.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("t 3 (0x1.8p+1)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nodes entered by the closest-hit query"), std::string::npos) << r.output;
+  const nlohmann::json j = read_json_file(dir / "trace.json");
+  EXPECT_TRUE(j.at("agree").get<bool>());
+  EXPECT_EQ(j.at("ray").at("hex"), "0x1p-1 0x1p-2 0x1.8p+1 0x0p+0 -0x0p+0 -0x1p+0 0x0p+0 inf");
+  ASSERT_EQ(j.at("backends").size(), 4u);
+  for (const auto& b : j.at("backends")) {
+    EXPECT_EQ(b.at("closest").at("t_hex"), "0x1.8p+1") << b;
+    EXPECT_EQ(b.at("closest").at("prim_id"), 0) << b;
+    EXPECT_TRUE(b.at("occluded").get<bool>()) << b;
+  }
+  // bvh lists the nodes it entered, root first; a counting plugin its counts.
+  const auto& visits = j.at("backends")[0].at("visits").at("closest");
+  ASSERT_FALSE(visits.empty());
+  EXPECT_EQ(visits[0].at("node"), 0);
+  EXPECT_TRUE(visits.back().at("leaf").get<bool>());
+  EXPECT_GT(j.at("backends")[3].at("closest_stats").at("nodes_visited").get<int>(), 0);
+}
+
+TEST(TraceCli, PluginCrashIsAnAnswerNotACrash) {
+  const CommandResult r = run_twinray("trace procedural:box:-2:2 --backends embree,plugin:" +
+                                      quoted(scotty_plugin("zero-direction")) + " --ray '0.5 0.5 -5 0 0 1 0 inf'");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("SIGSEGV"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("geom 0"), std::string::npos) << r.output;  // embree's answer is still there
+}
+
+TEST(TraceCli, BadRaysAndScenesAreBadInput) {
+  for (const char* args : {"trace procedural:triangle --ray '1 2 3'", "trace procedural:triangle --ray '1 2 3 4 5 6 7 x'",
+                           "trace procedural:nothing --ray '0 0 1 0 0 -1 0 inf'",
+                           "trace procedural:triangle --backends nope --ray '0 0 1 0 0 -1 0 inf'"}) {
+    const CommandResult r = run_twinray(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace twinray::testing

@@ -1,0 +1,146 @@
+// `twinray grade` against the test plugins of tests/plugins: the correct Scotty3D-style BVH earns full marks,
+// each classic bug lands in its category with its outcome (fail, crash, timeout), the cheat is stopped by the
+// sandbox, the starter kit earns nothing on correctness without crashing, and two runs give the same
+// scorecard. Graded with tests/suites/grading (small scenes, short limits).
+
+#include "harness/grade/grade_run.h"
+#include "harness/grade/reports.h"
+#include "tests/grade_test_util.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace twinray::grade {
+namespace {
+
+using testing::scotty_plugin;
+
+Scorecard grade(const std::filesystem::path& plugin, std::vector<std::string> only = {}) {
+  GradeSettings s;
+  s.plugin = plugin;
+  s.suite = testing::grading_test_suite().string();
+  s.only = std::move(only);
+  s.twinray = TWINRAY_BINARY;  // reproduce lines start the real program, as `twinray grade` writes them
+  return run_grade(s);
+}
+
+const CheckResult& check_named(const Scorecard& card, const std::string& name) {
+  for (const CheckResult& c : card.checks)
+    if (c.name == name) return c;
+  throw std::logic_error("no check " + name);
+}
+
+std::string lines(const Scorecard& card) {
+  std::string s;
+  for (const CheckResult& c : card.checks) s += terminal_check_line(c);
+  return s;
+}
+
+TEST(GradePlugins, CorrectPluginGetsFullMarks) {
+  const Scorecard card = grade(scotty_plugin());
+  EXPECT_TRUE(card.passed()) << lines(card);
+  EXPECT_EQ(card.score(), card.max_score()) << lines(card);
+  EXPECT_GT(card.max_score(), 0.0);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+  // It claims watertight and the tie rule, so those checks count.
+  EXPECT_GT(check_named(card, "watertight-ball").max_points, 0.0);
+  EXPECT_GT(check_named(card, "ties-duplicates").max_points, 0.0);
+}
+
+TEST(GradePlugins, StarterKitEarnsNothingOnCorrectnessAndNeverCrashes) {
+  const Scorecard card = grade(testing::student_kit_plugin());
+  EXPECT_FALSE(card.passed());
+  for (const CheckResult& c : card.checks) {
+    EXPECT_NE(c.outcome, Outcome::Crash) << terminal_check_line(c);
+    EXPECT_NE(c.outcome, Outcome::Timeout) << terminal_check_line(c);
+    if (is_correctness_category(c.category)) {
+      EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
+      EXPECT_EQ(c.points, 0.0);
+    }
+  }
+  // It claims nothing, so watertight and ties are reported but worth nothing.
+  EXPECT_EQ(check_named(card, "watertight-ball").max_points, 0.0);
+  EXPECT_FALSE(check_named(card, "watertight-ball").required);
+}
+
+struct BugCase {
+  std::string bug;
+  std::string caught_by;      // the check that must catch it
+  Outcome outcome;
+  std::string detail_words;   // in the check's detail
+  std::string still_passes;   // a check of another category the bug does not touch
+};
+
+class GradeBugs : public ::testing::TestWithParam<BugCase> {};
+
+TEST_P(GradeBugs, LandInTheirCategoryWithTheirOutcome) {
+  const BugCase& b = GetParam();
+  const Scorecard card = grade(scotty_plugin(b.bug), {b.caught_by, b.still_passes});
+  const CheckResult& caught = check_named(card, b.caught_by);
+  EXPECT_EQ(caught.outcome, b.outcome) << terminal_check_line(caught);
+  EXPECT_EQ(caught.points, 0.0);
+  EXPECT_NE(caught.detail.find(b.detail_words), std::string::npos) << caught.detail;
+  EXPECT_FALSE(caught.reproduce.empty());
+  EXPECT_FALSE(card.passed());
+  // The grader went on (in a fresh worker after a crash or timeout) and the untouched check passed.
+  EXPECT_EQ(check_named(card, b.still_passes).outcome, Outcome::Pass) << lines(card);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    ClassicBugs, GradeBugs,
+    ::testing::Values(BugCase{"first-hit", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"},
+                      BugCase{"early-exit", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"},
+                      BugCase{"slab-no-swap", "closest-cornell", Outcome::Fail, "plugin reports a miss", "build-empty"},
+                      BugCase{"lost-primitive", "closest-cornell", Outcome::Fail, "answers wrong", "build-empty"},
+                      BugCase{"before-tmin", "ray-interval-soup", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"zero-direction", "axis-aligned-box", Outcome::Crash, "SIGSEGV", "closest-soup"},
+                      BugCase{"infinite-loop", "axis-aligned-box", Outcome::Timeout, "", "closest-soup"},
+                      BugCase{"shared-stack", "thread-safety-soup", Outcome::Fail, "concurrent answers differ",
+                              "closest-soup"},
+                      BugCase{"anyhit-tmax", "any-hit-cornell", Outcome::Fail, "plugin says occluded", "closest-cornell"}),
+    [](const ::testing::TestParamInfo<BugCase>& param) {
+      std::string name = param.param.bug;
+      for (char& c : name)
+        if (c == '-') c = '_';
+      return name;
+    });
+
+TEST(GradePlugins, CheatingPluginIsStoppedBySandbox) {
+  const std::filesystem::path mark = "/tmp/twinray-cheat-plugin-escaped";
+  std::filesystem::remove(mark);
+  const Scorecard card = grade(scotty_plugin("opens-files"), {"closest-soup", "closest-cornell"});
+  for (const CheckResult& c : card.checks) {
+    EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("sandbox"), std::string::npos) << c.detail;
+  }
+  EXPECT_FALSE(std::filesystem::exists(mark)) << "the plugin wrote " << mark;
+}
+
+TEST(GradePlugins, SameScorecardTwice) {
+  const std::vector<std::string> checks = {"closest-soup", "ray-interval-soup", "axis-aligned-box", "watertight-ball"};
+  const Scorecard a = grade(scotty_plugin("lost-primitive"), checks), b = grade(scotty_plugin("lost-primitive"), checks);
+  ASSERT_EQ(a.checks.size(), b.checks.size());
+  for (std::size_t i = 0; i < a.checks.size(); ++i) {
+    EXPECT_EQ(a.checks[i].outcome, b.checks[i].outcome);
+    EXPECT_EQ(a.checks[i].points, b.checks[i].points);
+    EXPECT_EQ(a.checks[i].detail, b.checks[i].detail);
+    EXPECT_EQ(a.checks[i].reproduce, b.checks[i].reproduce);
+    EXPECT_EQ(a.checks[i].figures, b.checks[i].figures);
+  }
+  EXPECT_EQ(a.score(), b.score());
+}
+
+TEST(GradePlugins, ReproduceLineWorksWhenPasted) {
+  const Scorecard card = grade(scotty_plugin("lost-primitive"), {"closest-soup"});
+  const CheckResult& c = check_named(card, "closest-soup");
+  ASSERT_EQ(c.outcome, Outcome::Fail);
+  ASSERT_NE(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
+  // The line replays the first wrong ray: the plugin and the reference disagree on it, genuinely.
+  const testing::CommandResult r = testing::run_command("CI=true " + c.reproduce);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("closest hit genuine"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace twinray::grade

@@ -1,0 +1,105 @@
+// The grading ray sets (harness/grade/grade_rays.h): each has the property its check relies on.
+
+#include "backends/registry.h"
+#include "core/camera/pinhole_camera.h"
+#include "harness/grade/grade_rays.h"
+#include "harness/scenes/named_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace twinray::grade {
+namespace {
+
+bool has_zero_component(const glm::vec3& d) { return d.x == 0.0f || d.y == 0.0f || d.z == 0.0f; }
+
+TEST(GradeRays, AxisAlignedRaysHaveExactZerosOfBothSignsAndOriginsOnFaces) {
+  const Scene scene = load_named_scene("procedural:box:-2:2");
+  const Bounds3 b = scene.geometry.bounds();
+  const std::vector<Ray> rays = axis_aligned_rays(scene, 400, 5);
+  ASSERT_EQ(rays.size(), 400u);
+  std::size_t negative_zero = 0, positive_zero = 0, on_face = 0;
+  for (const Ray& r : rays) {
+    ASSERT_TRUE(is_valid_ray(r));
+    EXPECT_TRUE(has_zero_component(r.dir));
+    for (int a = 0; a < 3; ++a) {
+      if (r.dir[a] == 0.0f) (std::signbit(r.dir[a]) ? negative_zero : positive_zero) += 1;
+      if (r.org[a] == b.lo[a] || r.org[a] == b.hi[a]) ++on_face;
+    }
+  }
+  EXPECT_GT(negative_zero, 50u);
+  EXPECT_GT(positive_zero, 50u);
+  EXPECT_GE(on_face, 200u);  // half of them start exactly on a face
+}
+
+TEST(GradeRays, IntervalVariantsStraddleTheFirstHit) {
+  const Ray r = {glm::vec3(0.0f, 0.0f, 5.0f), 0.0f, glm::vec3(0.0f, 0.0f, -1.0f), INFINITY};
+  Hit h;
+  h.t = 5.0f;
+  h.geom_id = h.prim_id = 0;
+  const std::vector<Ray> v = interval_rays(std::span<const Ray>(&r, 1), std::span<const Hit>(&h, 1));
+  ASSERT_EQ(v.size(), 4u);
+  EXPECT_LT(v[0].tmax, 5.0f);  // ends before
+  EXPECT_GT(v[1].tmin, 5.0f);  // starts after
+  EXPECT_GT(v[2].tmax, 5.0f);  // ends after
+  EXPECT_LT(v[3].tmin, 5.0f);  // starts before
+  for (const Ray& x : v) EXPECT_TRUE(is_valid_ray(x));
+  Hit miss;
+  EXPECT_TRUE(interval_rays(std::span<const Ray>(&r, 1), std::span<const Hit>(&miss, 1)).empty());
+}
+
+TEST(GradeRays, WatertightRaysAllHitAClosedMesh) {
+  const Scene scene = load_named_scene("procedural:sphere-mesh:3");
+  const auto embree = make_backend("embree");
+  embree->build(scene.geometry);
+  const std::vector<Ray> rays = watertight_rays(scene, 2000, 1, std::nullopt);
+  ASSERT_EQ(rays.size(), 2000u);
+  std::size_t misses = 0;
+  for (const Ray& r : rays) {
+    Hit h;
+    misses += embree->intersect(r, h) ? 0 : 1;
+  }
+  EXPECT_EQ(misses, 0u);  // robust Embree is watertight: every ray of the set must hit
+}
+
+TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
+  const Scene scene = load_named_scene("procedural:sphere-sizes");
+  const auto brute = make_backend("brute");
+  brute->build(scene.geometry);
+  const std::vector<Ray> rays = sphere_rays(scene, 600, 1);
+  std::size_t hits = 0;
+  for (const Ray& r : rays) {
+    Hit h;
+    hits += brute->intersect(r, h) ? 1 : 0;
+  }
+  // Every kind is present: neither all hits nor all misses.
+  EXPECT_GT(hits, 200u);
+  EXPECT_LT(hits, 550u);
+}
+
+TEST(GradeRays, RaySetsAreDeterministic) {
+  const Scene scene = load_named_scene("procedural:soup:200:1");
+  const auto same = [](const std::vector<Ray>& a, const std::vector<Ray>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Ray)) == 0;
+  };
+  EXPECT_TRUE(same(axis_aligned_rays(scene, 100, 3), axis_aligned_rays(scene, 100, 3)));
+  EXPECT_TRUE(same(tie_rays(scene, 100, 3), tie_rays(scene, 100, 3)));
+  EXPECT_FALSE(same(tie_rays(scene, 100, 3), tie_rays(scene, 100, 4)));
+}
+
+TEST(GradeRays, PixelRaysCoverTheImageRowByRow) {
+  const Scene scene = load_named_scene("procedural:grid:4:4");
+  const PixelRays p = camera_pixel_rays(scene, 1000);
+  EXPECT_EQ(p.rays.size(), static_cast<std::size_t>(p.width) * static_cast<std::size_t>(p.height));
+  EXPECT_NEAR(static_cast<double>(p.rays.size()), 1000.0, 70.0);
+  // Ray i is pixel (i % width, i / width): the first row sweeps left to right, the rows go top to bottom.
+  const PinholeCamera camera(scene.camera);
+  const auto w = static_cast<std::size_t>(p.width);
+  for (std::size_t i = 1; i < w; ++i) EXPECT_GT(glm::dot(p.rays[i].dir, camera.right()), glm::dot(p.rays[i - 1].dir, camera.right()));
+  EXPECT_GT(glm::dot(p.rays[0].dir, camera.up()), glm::dot(p.rays[p.rays.size() - w].dir, camera.up()));
+}
+
+}  // namespace
+}  // namespace twinray::grade

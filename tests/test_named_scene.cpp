@@ -1,0 +1,64 @@
+// Scenes by name (harness/scenes/named_scene.h): what suites and `twinray trace` load.
+
+#include "core/util/input_error.h"
+#include "harness/scenes/named_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+namespace twinray {
+namespace {
+
+TEST(NamedScene, ProceduralScenesHaveTheDocumentedSizes) {
+  EXPECT_EQ(load_named_scene("procedural:empty").geometry.primitive_count(), 0u);
+  EXPECT_EQ(load_named_scene("procedural:triangle").geometry.triangle_count(), 1u);
+  EXPECT_EQ(load_named_scene("procedural:identical-triangles:300").geometry.triangle_count(), 300u);
+  EXPECT_EQ(load_named_scene("procedural:grid:3:5").geometry.triangle_count(), 30u);
+  EXPECT_EQ(load_named_scene("procedural:sphere-mesh:2").geometry.triangle_count(), 320u);  // 20 * 4^2
+  EXPECT_EQ(load_named_scene("procedural:box:-1:1").geometry.triangle_count(), 6u * 2u * 2u * 2u);
+  EXPECT_EQ(load_named_scene("procedural:spheres:7:1").geometry.sphere_count(), 7u);
+  EXPECT_EQ(load_named_scene("procedural:sphere-sizes").geometry.sphere_count(), 5u);
+  const Scene dup = load_named_scene("procedural:duplicates:10:2");
+  ASSERT_EQ(dup.geometry.meshes.size(), 2u);
+  EXPECT_EQ(dup.geometry.meshes[0].triangle_count(), 20u);
+  EXPECT_EQ(dup.geometry.meshes[1].indices, dup.geometry.meshes[0].indices);
+  // Every scene has a shape per geometry id and a material, like a loaded scene.
+  EXPECT_EQ(dup.shapes.size(), 2u);
+  EXPECT_FALSE(dup.materials.empty());
+}
+
+TEST(NamedScene, ProceduralScenesAreDeterministic) {
+  const Scene a = load_named_scene("procedural:soup:100:9"), b = load_named_scene("procedural:soup:100:9");
+  ASSERT_EQ(a.geometry.meshes[0].positions.size(), b.geometry.meshes[0].positions.size());
+  EXPECT_EQ(std::memcmp(a.geometry.meshes[0].positions.data(), b.geometry.meshes[0].positions.data(),
+                        a.geometry.meshes[0].positions.size() * sizeof(glm::vec3)),
+            0);
+  const Scene far = load_named_scene("procedural:sphere-mesh:1:100:0:0:2");
+  EXPECT_NEAR(far.geometry.bounds().center().x, 100.0f, 1e-3f);
+}
+
+TEST(NamedScene, BadNamesAreInputErrorsNamingTheScene) {
+  for (const char* bad : {"procedural:nothing", "procedural:soup:10", "procedural:soup:-3:1", "procedural:grid:2:x",
+                          "procedural:sphere-mesh:12", "procedural:box:3:1", "procedural:empty:1",
+                          "procedural:sphere-mesh:1:0:0:0:-1", "no/such/scene.json"}) {
+    try {
+      load_named_scene(bad);
+      ADD_FAILURE() << bad << " loaded";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(NamedScene, FilesResolveAgainstTheBaseAndBecomeAbsolute) {
+  const std::filesystem::path scenes = std::filesystem::path(TWINRAY_SOURCE_DIR) / "scenes";
+  EXPECT_EQ(load_named_scene("cornell-box.json", scenes).geometry.triangle_count(), 36u);
+  const std::string portable = portable_scene_name("cornell-box.json", scenes);
+  EXPECT_TRUE(std::filesystem::path(portable).is_absolute()) << portable;
+  EXPECT_EQ(portable_scene_name("procedural:grid:2:2", scenes), "procedural:grid:2:2");
+  EXPECT_EQ(portable_scene_name("$TWINRAY_SHARED/data/meshes/bunny.obj", scenes), "$TWINRAY_SHARED/data/meshes/bunny.obj");
+}
+
+}  // namespace
+}  // namespace twinray
