@@ -31,12 +31,12 @@ class PathIntegrator final : public Integrator {
                 TraceCounters& counters) const override;
 
   // Paths advanced together at most; larger batches are traced in chunks of this size. 256 (a 16 x 16
-  // tile) keeps a chunk's state, rays and hits (~70 KiB) on the stack and within the L2 cache.
+  // tile) keeps a chunk's state, rays and hits (~70 KiB, one reused set per thread) within the L2 cache.
   static constexpr std::size_t kMaxBatch = 256;
 
  private:
-  // At most kCapacity samples; the capacity sizes the chunk's stack arrays (1 for radiance(ray, ...), so a
-  // lone path does not initialise state for 256).
+  // At most kCapacity samples; the capacity sizes the chunk's working arrays (1 for radiance(ray, ...), so
+  // a lone path does not walk arrays sized for 256).
   template <std::size_t kCapacity>
   void trace_chunk(std::span<CameraSample> samples, std::span<glm::vec3> out, std::span<FirstHitInfo> first,
                    TraceCounters& counters) const;
