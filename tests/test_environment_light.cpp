@@ -9,6 +9,7 @@
 #include "core/util/input_error.h"
 
 #include "tests/chi_square.h"
+#include "tests/environment_test_util.h"
 
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
@@ -305,18 +306,9 @@ TEST_F(EnvironmentLightTest, IrradianceAgreesWithImportanceSampledEstimate) {
   const auto light = EnvironmentLight::create(image_environment(map, "m.exr", 30.0f));
   const glm::vec3 n = glm::normalize(glm::vec3(0.2f, 0.7f, -0.4f));
   const glm::dvec3 reference = environment_irradiance(*light, n, 8);
-  const int count = 200000;
-  double sum = 0.0, sum2 = 0.0;
-  Rng rng(3, 3);
-  for (int i = 0; i < count; ++i) {
-    const EnvironmentLight::Sample s = light->sample(glm::vec2(rng.next_float(), rng.next_float()));
-    const double v = s.pdf > 0.0f ? s.radiance.x * std::max(0.0f, glm::dot(n, s.dir)) / s.pdf : 0.0;
-    sum += v;
-    sum2 += v * v;
-  }
-  const double mean = sum / count, std_error = std::sqrt((sum2 / count - mean * mean) / count);
+  const testing::SampledEstimate e = testing::sampled_red_irradiance(*light, n, 200000, Rng(3, 3));
   // 5 standard errors, plus the quadrature's own error along the horizon (< 1e-3 relative at 8 subdivisions).
-  EXPECT_NEAR(mean, reference.x, 5.0 * std_error + 1e-3 * reference.x);
+  EXPECT_NEAR(e.mean, reference.x, 5.0 * e.std_error + 1e-3 * reference.x);
 }
 
 TEST_F(EnvironmentLightTest, BadInputsThrowInputErrorNamingFileAndTexel) {

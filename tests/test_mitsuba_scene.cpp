@@ -128,6 +128,7 @@ TEST(MitsubaImport, FovAxesAndEnvmapRotation) {
     EXPECT_EQ(s.environment.type, EnvironmentType::Image);
     EXPECT_EQ(s.environment.scale, 2.0f);
     EXPECT_NEAR(s.environment.rotation_deg, 30.0f, 1e-4f);  // Mitsuba's angle minus 180 (docs/mitsuba.md)
+    EXPECT_EQ(s.environment.filter, EnvironmentFilter::Bilinear);  // Mitsuba's envmap lookup
   }
 }
 
@@ -233,6 +234,9 @@ void expect_round_trip(const Scene& original, const TempFolder& folder) {
   EXPECT_EQ(back.environment.radiance, original.environment.radiance);
   EXPECT_EQ(back.environment.scale, original.environment.scale);
   EXPECT_NEAR(back.environment.rotation_deg, original.environment.rotation_deg, 1e-4f);
+  if (original.environment.type == EnvironmentType::Image) {
+    EXPECT_EQ(back.environment.filter, EnvironmentFilter::Bilinear);
+  }
 }
 
 TEST(MitsubaExport, RoundTripOfTheBundledScenes) {
@@ -266,6 +270,34 @@ TEST(MitsubaExport, RoundTripOfOneSidedMaterialsAndARotatedMap) {
   scene.environment.rotation_deg = -75.0f;
   scene.environment.scale = 0.5f;
   expect_round_trip(scene, folder);
+}
+
+// compare's export: a nearest-texel map goes to Mitsuba with every texel repeated k x k times, a bilinear
+// one as it is (both renderers then look it up the same way), under its own name.
+TEST(MitsubaExport, BilinearMapsAreWrittenAsTheyAreAndNearestOnesUpsampled) {
+  TempFolder folder;
+  Image map(6, 3, 3);
+  for (std::size_t i = 0; i < map.data.size(); ++i) map.data[i] = static_cast<float>(i % 7) + 0.5f;
+  write_exr(folder.path() / "sky.exr", map);
+  Scene scene;
+  scene.environment.type = EnvironmentType::Image;
+  scene.environment.image = folder.path() / "sky.exr";
+  MitsubaExportOptions options;
+  options.env_upsample = 4;
+
+  scene.environment.filter = EnvironmentFilter::Nearest;
+  export_mitsuba_scene(scene, folder.path() / "nearest", options);
+  const Image upsampled = read_image(folder.path() / "nearest" / "textures" / "sky.exr");
+  EXPECT_EQ(upsampled.width, 24);
+  EXPECT_EQ(upsampled.height, 12);
+  EXPECT_EQ(upsampled.at(7, 5, 1), map.at(1, 1, 1));
+
+  scene.environment.filter = EnvironmentFilter::Bilinear;
+  export_mitsuba_scene(scene, folder.path() / "bilinear", options);
+  const Image copied = read_image(folder.path() / "bilinear" / "textures" / "sky.exr");
+  ASSERT_EQ(copied.width, 6);
+  ASSERT_EQ(copied.height, 3);
+  EXPECT_EQ(copied.data, map.data);
 }
 
 // The shared Cornell box XML: the same scene as scenes/cornell-box-reference.json, and it renders to the

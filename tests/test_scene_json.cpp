@@ -44,7 +44,7 @@ TEST(JsonScene, EveryFieldReachesTheScene) {
       {"type": "sphere", "center": [1, 2, 3], "radius": 0.5, "material": "water", "name": "ball"},
       {"type": "sphere", "center": [-1, 0, 0], "radius": 2, "material": "chrome"}
     ],
-    "environment": {"type": "image", "file": "sky.hdr", "rotation": 90, "scale": 2.5},
+    "environment": {"type": "image", "file": "sky.hdr", "rotation": 90, "scale": 2.5, "filter": "bilinear"},
     "render": {"spp": 128, "max_depth": 7, "seed": 18446744073709551615}
   })");
   const Scene scene = load_scene(scene_file);
@@ -102,6 +102,7 @@ TEST(JsonScene, EveryFieldReachesTheScene) {
   EXPECT_EQ(scene.environment.image, folder.path() / "sky.hdr");
   EXPECT_EQ(scene.environment.rotation_deg, 90.0f);
   EXPECT_EQ(scene.environment.scale, 2.5f);
+  EXPECT_EQ(scene.environment.filter, EnvironmentFilter::Bilinear);
   EXPECT_EQ(scene.render.spp, 128);
   EXPECT_EQ(scene.render.max_depth, 7);
   EXPECT_EQ(scene.render.seed, 18446744073709551615ull);
@@ -122,6 +123,7 @@ TEST(JsonScene, OptionalFieldsTakeDocumentedDefaults) {
   EXPECT_EQ(scene.materials[2].albedo, glm::vec3(0));
   EXPECT_EQ(scene.environment.type, EnvironmentType::Constant);
   EXPECT_EQ(scene.environment.radiance, glm::vec3(0.5f, 0.25f, 0));
+  EXPECT_EQ(scene.environment.filter, EnvironmentFilter::Nearest);  // the default lookup of image maps too
   EXPECT_EQ(scene.render.spp, 16);
   EXPECT_EQ(scene.render.max_depth, -1);
   EXPECT_EQ(scene.render.seed, 0u);

@@ -10,13 +10,21 @@
 //           with +X on your right, the image continues to the right.
 //   rotation_deg rotates the map about +Y, positive = counter-clockwise seen from above (right-handed about
 //           +Y): with 90 degrees, what the unrotated map showed towards +X is seen towards -Z.
-// Radiance is piecewise constant per texel (nearest-texel lookup, no filtering), which is exactly the
-// function the importance sampler is built for, so pdf(dir) is proportional to the luminance of eval(dir).
+// Lookup (Environment::filter):
+//   nearest  (the default) radiance is piecewise constant per texel, which is exactly the function the
+//            importance sampler is built for, so pdf(dir) is proportional to the luminance of eval(dir).
+//   bilinear Mitsuba 3's envmap lookup: texel centres on a grid with u = (x + 0.5) / width, periodic, and
+//            theta = y pi / (height - 1), first row at the zenith and last at the nadir; radiance is
+//            interpolated bilinearly between the four centres around dir. Used for Mitsuba scenes and
+//            wherever a map must look the same as in Mitsuba (docs/environment.md).
 //
-// Importance sampling (image maps only): a texel is chosen with probability proportional to
-// luminance * solid angle of the texel (the solid angle is proportional to sin(theta) at the row centre),
-// then a direction uniform in solid angle inside that texel. The resulting solid-angle density is
-// luminance / sum(luminance * texel solid angle): constant per texel, no 1/sin(theta) blow-up at the poles.
+// Importance sampling (image maps only) works on a grid of sampling cells: the texels themselves for
+// nearest, the width x (height - 1) bilinear patches between texel centres for bilinear. A cell is chosen
+// with probability proportional to its luminance (the texel's; for a patch the mean of its four corners)
+// times its solid angle (proportional to sin(theta) at the row centre), then a direction uniform in solid
+// angle inside the cell. The resulting solid-angle density is constant per cell, with no 1/sin(theta)
+// blow-up at the poles. For bilinear it is only roughly proportional to eval(dir), but positive wherever
+// eval(dir) is (a patch with a bright corner has a positive weight), so the estimators stay unbiased.
 
 #include "core/sampling/distribution_2d.h"
 #include "core/scene/scene.h"
@@ -64,8 +72,17 @@ class EnvironmentLight {
   int width() const { return width_; }   // texels; 0 for a constant environment
   int height() const { return height_; }
 
-  // The map-space texel (column, row) that world direction dir looks up (rotation applied); for image maps.
+  EnvironmentFilter filter() const { return filter_; }
+  // The map-space texel (column, row) whose cell contains world direction dir under nearest lookup
+  // (rotation applied); for image maps. With bilinear lookup, the sampling cell (patch) instead: see cell_of.
   glm::ivec2 texel_of(const glm::vec3& dir) const;
+  // The sampling cell (column, row) that contains world direction dir: the texel for nearest lookup, the
+  // bilinear patch whose lower-left corner is texel (column, row) for bilinear lookup; for image maps.
+  glm::ivec2 cell_of(const glm::vec3& dir) const;
+  // Number of sampling cells per row and per column (width x height, or width x (height - 1)).
+  glm::ivec2 cell_grid() const { return {width_, cell_rows_}; }
+  // Solid angle of one sampling cell in row y.
+  double cell_solid_angle(int y) const;
   // Radiance of texel (column, row), scale included; for image maps.
   glm::vec3 texel(int x, int y) const {
     return texels_[static_cast<std::size_t>(y) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(x)];
@@ -82,8 +99,10 @@ class EnvironmentLight {
 
   // World direction -> unrotated map coordinates (u, v) in [0,1]^2.
   glm::vec2 map_uv(const glm::vec3& dir) const;
-  // Row-major index of the texel texel_of(dir).
-  std::size_t texel_index(const glm::vec3& dir) const;
+  // Row-major index of the cell cell_of(dir) (for nearest lookup also the texel's index).
+  std::size_t cell_index(const glm::vec3& dir) const;
+  // Radiance at unrotated map coordinates (u, v) under bilinear lookup.
+  glm::vec3 bilinear(glm::vec2 uv) const;
   // World direction for map-space azimuth phi_map (phi of the unrotated map) and cos(theta).
   glm::vec3 world_direction(double phi_map, double cos_theta) const;
 
@@ -91,11 +110,16 @@ class EnvironmentLight {
   int width_ = 0, height_ = 0;                 // 0 x 0 for constant environments
   std::vector<glm::vec3> texels_;              // radiance * scale, row-major, top row (zenith) first
   float rotation_u_ = 0.0f;                    // rotation_deg / 360: map u = world u + rotation_u_ (mod 1)
-  std::vector<double> row_cos_;                // cos(theta) at the height_ + 1 row edges
+  EnvironmentFilter filter_ = EnvironmentFilter::Nearest;
+  // Sampling cells: width_ columns starting at map u = cell_u0_ (0, or half a texel for bilinear patches),
+  // cell_rows_ rows (height_, or height_ - 1 for bilinear patches).
+  float cell_u0_ = 0.0f;
+  int cell_rows_ = 0;
+  std::vector<double> row_cos_;                // cos(theta) at the cell_rows_ + 1 cell row edges
   std::optional<Distribution2D> distribution_; // importance tables (image maps with importance = true)
-  // Solid-angle pdf of every texel, pmf / texel solid angle, row-major: pdf() is one load, no search
+  // Solid-angle pdf of every cell, pmf / cell solid angle, row-major: pdf() is one load, no search
   // through the distribution (MIS evaluates it for every BSDF-sampled ray that escapes).
-  std::vector<float> texel_pdf_;
+  std::vector<float> cell_pdf_;
   glm::vec3 average_{0.0f};
 };
 
@@ -104,7 +128,9 @@ class EnvironmentLight {
 // angle; one evaluation at each cell's centre in (phi, cos theta)), in double. Independent of the sampling
 // code, so tests of the renderer can compare against it: a white Lambertian plane facing n has outgoing
 // radiance E(n) / pi. Constant environments are integrated on a 64 x 32 virtual grid (result pi * L up to
-// the quadrature error at the horizon; exact when n = +Y or -Y because the horizon is a row edge).
+// the quadrature error at the horizon; exact when n = +Y or -Y because the horizon is a row edge). With
+// bilinear lookup the cells subdivide the sampling cells (patches) and the radiance is evaluated at each
+// cell's centre: the midpoint rule, second-order accurate in the cell size.
 glm::dvec3 environment_irradiance(const EnvironmentLight& light, glm::vec3 normal, int subdivisions = 4);
 
 }  // namespace twinray

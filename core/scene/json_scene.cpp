@@ -282,7 +282,7 @@ class SceneParser {
       env.type = EnvironmentType::Constant;
       env.radiance = node.member("radiance").as_color();
     } else if (type_name == "image") {
-      node.expect_object({"type", "file", "rotation", "scale"});
+      node.expect_object({"type", "file", "rotation", "scale", "filter"});
       env.type = EnvironmentType::Image;
       const JsonNode file = node.member("file");
       env.image = resolve_file(file);
@@ -297,6 +297,12 @@ class SceneParser {
       if (const auto s = node.optional_member("scale")) {
         env.scale = s->as_float();
         if (env.scale < 0.0f) s->fail("scale must be non-negative, got " + s->json().dump());
+      }
+      if (const auto f = node.optional_member("filter")) {
+        const std::string filter = f->as_string();
+        if (filter == "nearest") env.filter = EnvironmentFilter::Nearest;
+        else if (filter == "bilinear") env.filter = EnvironmentFilter::Bilinear;
+        else f->fail("unknown environment filter '" + filter + "' (expected nearest or bilinear)");
       }
     } else {
       type.fail("unknown environment type '" + type_name + "' (expected constant or image)");

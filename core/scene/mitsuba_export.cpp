@@ -47,9 +47,15 @@ std::string mesh_file_name(std::uint32_t geom_id, const std::string& name) {
 // Material names are unique within a scene (JSON object keys), so they serve as XML ids as they are; the
 // importer reads them back as the materials' names.
 // A procedural or resampled map is written as EXR under its name; a copied file keeps its name.
+// How many times each texel is repeated in each direction: never for a bilinearly filtered map, which
+// Mitsuba must see as it is.
+int environment_upsample(const Environment& env, const MitsubaExportOptions& options) {
+  return env.filter == EnvironmentFilter::Bilinear ? 1 : std::max(1, options.env_upsample);
+}
+
 std::string environment_file_name(const Environment& env, const MitsubaExportOptions& options) {
   std::filesystem::path name = env.image.filename();
-  if (env.pixels || options.env_upsample > 1) name.replace_extension(".exr");
+  if (env.pixels || environment_upsample(env, options) > 1) name.replace_extension(".exr");
   return name.string();
 }
 
@@ -275,9 +281,10 @@ std::filesystem::path export_mitsuba_scene(const Scene& scene, const std::filesy
   if (scene.environment.type == EnvironmentType::Image) {
     std::filesystem::create_directories(out_dir / "textures", ec);
     const std::filesystem::path target = out_dir / "textures" / environment_file_name(scene.environment, options);
-    if (scene.environment.pixels || options.env_upsample > 1) {
+    const int upsample = environment_upsample(scene.environment, options);
+    if (scene.environment.pixels || upsample > 1) {
       const Image map = scene.environment.pixels ? *scene.environment.pixels : read_image(scene.environment.image);
-      write_exr(target, upsampled(map, std::max(1, options.env_upsample)));
+      write_exr(target, upsampled(map, upsample));
     } else {
       std::filesystem::copy_file(scene.environment.image, target, std::filesystem::copy_options::overwrite_existing, ec);
       if (ec) throw InputError(scene.environment.image, "", "cannot copy the environment map to " + target.string() + ": " + ec.message());

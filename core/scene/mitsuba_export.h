@@ -27,10 +27,11 @@ namespace twinray {
 
 struct MitsubaExportOptions {
   std::optional<int> rr_depth;  // overrides the scene's render.rr_depth (twinray's --rr-depth)
-  // Mitsuba interpolates environment maps bilinearly, twinray looks up the nearest texel. Writing the map
-  // with every texel repeated k x k times confines the difference to bands 1/k of a texel wide around the
-  // texel edges, where Mitsuba blends neighbours symmetrically: what `twinray compare` uses (k = 4) so that
-  // a directly seen sky agrees within noise. 1 copies the file as it is.
+  // Mitsuba interpolates environment maps bilinearly. A map twinray looks up bilinearly too
+  // (Environment::filter) is written as it is and both renderers see the same radiance. For a map twinray
+  // looks up by nearest texel, writing it with every texel repeated k x k times confines the difference to
+  // bands 1/k of a texel wide around the texel edges, where Mitsuba blends neighbours symmetrically: what
+  // `twinray compare` uses (k = 4). 1 copies the file as it is.
   int env_upsample = 1;
 };
 

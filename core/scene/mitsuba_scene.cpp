@@ -777,6 +777,7 @@ class MitsubaParser {
       env.radiance = p.color("radiance").value_or(glm::vec3(1.0f));
     } else if (type == "envmap") {
       env.type = EnvironmentType::Image;
+      env.filter = EnvironmentFilter::Bilinear;  // Mitsuba's envmap interpolates bilinearly, twinray does the same
       const std::string filename = p.string("filename").value_or("");
       if (filename.empty()) fail(node, "envmap needs a filename");
       env.image = resolve_relative(base_dir_, filename);

@@ -51,12 +51,20 @@ struct ShapeInfo {
 
 enum class EnvironmentType { None, Constant, Image };
 
+// How an image environment turns texels into radiance (docs/environment.md):
+//   Nearest:  piecewise constant, texel (x, y) covers u in [x, x+1] / width, theta in [y, y+1] pi / height.
+//   Bilinear: Mitsuba 3's `envmap` lookup: texel centres at u = (x + 0.5) / width (periodic in u) and
+//             theta = y pi / (height - 1) (the first row at the zenith, the last at the nadir), radiance
+//             interpolated bilinearly between the four surrounding centres.
+enum class EnvironmentFilter { Nearest, Bilinear };
+
 struct Environment {
   EnvironmentType type = EnvironmentType::None;
   glm::vec3 radiance{0.0f};       // Constant
   std::filesystem::path image;    // Image: latitude-longitude .hdr/.exr, top row = +Y (zenith)
   float rotation_deg = 0.0f;      // Image: rotation about +Y
   float scale = 1.0f;             // Image: radiance multiplier
+  EnvironmentFilter filter = EnvironmentFilter::Nearest;  // Image: texel lookup
   // Image: the texels in memory (a procedural map, such as the sky of a bare mesh); when set, `image` is
   // only the map's name and no file is read.
   std::shared_ptr<const Image> pixels;

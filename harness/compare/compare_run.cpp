@@ -24,8 +24,9 @@ constexpr int kPeerSppPerTimedBatch = 8;
 // The peer renders with seeds far from twinray's: not needed for independence (different generators), but
 // it keeps the seeds of the two distinguishable in logs.
 constexpr std::uint64_t kPeerSeedOffset = 1000;
-// Environment maps go to Mitsuba with each texel repeated 4 x 4 times (core/scene/mitsuba_export.h): its
-// bilinear lookup then differs from twinray's nearest-texel lookup only in bands a quarter texel wide.
+// Nearest-texel environment maps go to Mitsuba with each texel repeated 4 x 4 times (core/scene/
+// mitsuba_export.h): its bilinear lookup then differs from twinray's only in bands a quarter texel wide.
+// Bilinear maps go as they are: both renderers then look them up the same way.
 constexpr int kCompareEnvUpsample = 4;
 
 Image rgb_of(const Image& img) {

@@ -97,6 +97,7 @@ std::uint64_t reference_key(const Scene& scene, const ReferenceSettings& setting
   hash_vec3(h, env.radiance);
   h.value(env.rotation_deg);
   h.value(env.scale);
+  h.value(static_cast<int>(env.filter));
   if (env.type == EnvironmentType::Image && env.pixels) h.array(std::span<const float>(env.pixels->data));
   else if (env.type == EnvironmentType::Image) h.file(env.image);
   h.value(settings.spp);
