@@ -70,6 +70,25 @@ LightSampler::LightSampler(const Scene& scene, const EnvironmentLight* env) {
     for (float p : power) total += p;
     if (total > 0.0f && std::isfinite(total)) selection_.emplace(power);
   }
+  if (selection_) {
+    const std::size_t n = selection_->size();
+    pmf_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) pmf_[i] = selection_->pmf(i);
+    if (n <= kFewLights) {
+      cdf_.assign(n + 1, 0.0f);
+      double running = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        running += static_cast<double>(selection_->weight(i));
+        cdf_[i + 1] = static_cast<float>(running / selection_->weight_sum());
+      }
+      cdf_[n] = 1.0f;
+      inv_width_.assign(n, 0.0f);
+      for (std::size_t i = 0; i < n; ++i) {
+        const double width = static_cast<double>(cdf_[i + 1]) - static_cast<double>(cdf_[i]);
+        inv_width_[i] = width > 0.0 ? static_cast<float>(1.0 / width) : 0.0f;
+      }
+    }
+  }
 }
 
 float LightSampler::selection_probability(std::size_t light_index) const {
@@ -77,27 +96,44 @@ float LightSampler::selection_probability(std::size_t light_index) const {
 }
 
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, glm::vec2 u) const {
-  if (!selection_) return std::nullopt;
-  float rest = 0.0f;
-  float pmf = 0.0f;
-  const std::size_t i = selection_->sample_discrete(u.x, &pmf, &rest);
-  return sample_light(i, pmf, ref, glm::vec2(rest, u.y));
+  LightSample s;
+  if (!sample(ref, u, s)) return std::nullopt;
+  return s;
+}
+
+bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
+  if (!selection_) return false;
+  if (cdf_.empty()) {
+    float rest = 0.0f;
+    float pmf = 0.0f;
+    const std::size_t i = selection_->sample_discrete(u.x, &pmf, &rest);
+    return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
+  }
+  // Empty bins (zero power) have cdf[i] == cdf[i+1]: both steps are counted or neither, so they are
+  // skipped; u < 1 = cdf[n] never counts the last step.
+  const std::size_t n = pmf_.size();
+  std::size_t i = 0;
+  for (std::size_t k = 1; k < n; ++k) i += u.x >= cdf_[k] ? 1 : 0;
+  const float rest = std::min((u.x - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f);
+  return sample_light(i, pmf_[i], ref, glm::vec2(std::max(rest, 0.0f), u.y), s);
 }
 
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_select, glm::vec2 u) const {
   if (!selection_) return std::nullopt;
   float pmf = 0.0f;
   const std::size_t i = selection_->sample_discrete(u_select, &pmf);
-  return sample_light(i, pmf, ref, u);
+  LightSample s;
+  if (!sample_light(i, pmf, ref, u, s)) return std::nullopt;
+  return s;
 }
 
-std::optional<LightSample> LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u) const {
-  if (!(pmf > 0.0f)) return std::nullopt;
-  LightSample s;
+bool LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
+  if (!(pmf > 0.0f)) return false;
+  s = LightSample{};
   if (i < triangles_.size()) {
-    s = sample_triangle(triangles_[i], ref, u);
+    sample_triangle(triangles_[i], ref, u, s);
   } else if (i - triangles_.size() < spheres_.size()) {
-    s = sample_sphere(spheres_[i - triangles_.size()], ref, u);
+    sample_sphere(spheres_[i - triangles_.size()], ref, u, s);
   } else {
     const EnvironmentLight::Sample es = env_->sample(u);
     s.wi = es.dir;
@@ -106,28 +142,24 @@ std::optional<LightSample> LightSampler::sample_light(std::size_t i, float pmf, 
     s.is_environment = true;
   }
   s.pdf *= pmf;
-  if (!(s.pdf > 0.0f) || !std::isfinite(s.pdf)) return std::nullopt;
-  return s;
+  return s.pdf > 0.0f && std::isfinite(s.pdf);
 }
 
-LightSample LightSampler::sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u) const {
+void LightSampler::sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u, LightSample& s) {
   const glm::vec3 b = sample_uniform_triangle(u);
-  LightSample s;
   s.point = tri.p0 + b.y * tri.e1 + b.z * tri.e2;
   s.normal = tri.normal;
   const glm::vec3 d = s.point - ref;
   const float dist2 = glm::dot(d, d);
-  if (!(dist2 > 0.0f)) return s;  // pdf 0: rejected by the caller
+  if (!(dist2 > 0.0f)) return;  // pdf 0: rejected by the caller
   s.wi = d / std::sqrt(dist2);
   const float cos_light = -glm::dot(s.normal, s.wi);
-  if (!(cos_light > 0.0f)) return s;  // back side (one-sided emission) or edge-on: no contribution
+  if (!(cos_light > 0.0f)) return;  // back side (one-sided emission) or edge-on: no contribution
   s.radiance = tri.radiance;
   s.pdf = dist2 / (cos_light * tri.area);
-  return s;
 }
 
-LightSample LightSampler::sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u) const {
-  LightSample s;
+void LightSampler::sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u, LightSample& s) {
   const glm::vec3 to_center = sph.center - ref;
   const float dist2 = glm::dot(to_center, to_center);
   if (outside_sphere(dist2, sph.radius)) {
@@ -144,19 +176,18 @@ LightSample LightSampler::sample_sphere(const EmissiveSphere& sph, const glm::ve
     s.point = sph.center + sph.radius * s.normal;
     s.radiance = sph.radiance;  // seen from outside: always the emitting side
     s.pdf = uniform_cone_pdf_one_minus_cos(one_minus_cos);
-    return s;
+    return;
   }
   s.normal = sample_uniform_sphere(u);
   s.point = sph.center + sph.radius * s.normal;
   const glm::vec3 d = s.point - ref;
   const float d2 = glm::dot(d, d);
-  if (!(d2 > 0.0f)) return s;
+  if (!(d2 > 0.0f)) return;
   s.wi = d / std::sqrt(d2);
   const float cos_light = -glm::dot(s.normal, s.wi);
   // From inside, the inner (back) side faces ref: no emission, but the pdf stays what sampling produced.
   s.radiance = cos_light > 0.0f ? sph.radiance : glm::vec3(0.0f);
   s.pdf = std::abs(cos_light) > 0.0f ? d2 / (std::abs(cos_light) * 4.0f * kPi * sph.radius * sph.radius) : 0.0f;
-  return s;
 }
 
 float LightSampler::sphere_pdf(const EmissiveSphere& sph, const glm::vec3& ref, const glm::vec3& point,
@@ -183,15 +214,15 @@ float LightSampler::pdf_surface(const glm::vec3& ref, const Hit& hit, const glm:
     const float dist2 = glm::dot(d, d);
     const float cos_light = std::abs(glm::dot(tri.normal, d)) / std::sqrt(dist2);
     if (!(cos_light > 0.0f) || !(tri.area > 0.0f)) return 0.0f;
-    return selection_->pmf(i) * dist2 / (cos_light * tri.area);
+    return pmf_[i] * dist2 / (cos_light * tri.area);
   }
   const EmissiveSphere& sph = spheres_[first - triangles_.size()];
-  return selection_->pmf(first) * sphere_pdf(sph, ref, point, hit.ng);
+  return pmf_[first] * sphere_pdf(sph, ref, point, hit.ng);
 }
 
 float LightSampler::pdf_environment(const glm::vec3& dir) const {
   if (!selection_ || env_ == nullptr || env_index_ == kNone) return 0.0f;
-  return selection_->pmf(env_index_) * env_->pdf(dir);
+  return pmf_[env_index_] * env_->pdf(dir);
 }
 
 }  // namespace twinray

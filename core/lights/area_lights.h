@@ -82,6 +82,9 @@ class LightSampler {
   // the union of the lights (a quad lamp made of two triangles is sampled like one square) instead of each
   // light receiving a random subset of them; what the integrators use with the Sobol sampler.
   std::optional<LightSample> sample(const glm::vec3& ref, glm::vec2 u) const;
+  // The same without the optional (what the integrators call once per vertex): false when the sample
+  // cannot contribute (pdf 0 or not finite), `out` then unspecified.
+  bool sample(const glm::vec3& ref, glm::vec2 u, LightSample& out) const;
 
   // Density with which sample(ref, ...) would produce the direction toward `point` on surface light hit
   // `hit` (geometry and primitive ids); 0 when that primitive is not a sampled light.
@@ -97,9 +100,9 @@ class LightSampler {
  private:
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-  std::optional<LightSample> sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u) const;
-  LightSample sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u) const;
-  LightSample sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u) const;
+  bool sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u, LightSample& s) const;
+  static void sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u, LightSample& s);
+  static void sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u, LightSample& s);
   static float sphere_pdf(const EmissiveSphere& sph, const glm::vec3& ref, const glm::vec3& point,
                           const glm::vec3& normal);
 
@@ -110,6 +113,13 @@ class LightSampler {
   const EnvironmentLight* env_ = nullptr;
   std::uint32_t env_index_ = kNone;
   std::optional<Distribution1D> selection_;
+  // The selection again, in float, for the common case of a few lights: the index is the number of CDF
+  // steps at or below u (no branch, no search), the remapped u is (u - cdf) * inv_width. pmf_ is the
+  // selection probability of each light (pdf_surface needs it for every emitter hit).
+  static constexpr std::size_t kFewLights = 16;
+  std::vector<float> cdf_;        // size n + 1, only when n <= kFewLights
+  std::vector<float> inv_width_;  // 1 / (cdf[i+1] - cdf[i]), 0 for empty bins; only when n <= kFewLights
+  std::vector<float> pmf_;        // size n
 };
 
 }  // namespace twinray

@@ -71,6 +71,16 @@ class Bsdf {
     return tint_ * (std::abs(cos_i) * std::numbers::inv_pi_v<float>);
   }
 
+  // eval() and pdf() at once (what a light sample's MIS weight needs): one pair of dot products.
+  glm::vec3 eval(const glm::vec3& wo, const glm::vec3& wi, const glm::vec3& ng, float& pdf_out) const {
+    pdf_out = 0.0f;
+    if (kind_ != Kind::Lambertian) return glm::vec3(0.0f);
+    const float cos_o = glm::dot(wo, ng), cos_i = glm::dot(wi, ng);
+    if (!same_side(cos_o, cos_i) || (one_sided_ && !(cos_o > 0.0f))) return glm::vec3(0.0f);
+    pdf_out = std::abs(cos_i) * std::numbers::inv_pi_v<float>;
+    return tint_ * pdf_out;
+  }
+
   float pdf(const glm::vec3& wo, const glm::vec3& wi, const glm::vec3& ng) const {
     if (kind_ != Kind::Lambertian) return 0.0f;
     const float cos_o = glm::dot(wo, ng), cos_i = glm::dot(wi, ng);
@@ -78,35 +88,50 @@ class Bsdf {
     return std::abs(cos_i) * std::numbers::inv_pi_v<float>;
   }
 
+  // One 2D value drives every kind: the direction of a Lambertian sample, or (u.x) the lobe of the
+  // dielectric; each kind uses only what it needs, so one sampler dimension serves every vertex.
+  // False when nothing is scattered (grazing, the black back of a one-sided surface, black); `out` is then
+  // unspecified. This is the form the integrators call; the optional ones below wrap it.
+  bool sample(const glm::vec3& wo, const glm::vec3& ng, glm::vec2 u, BsdfSample& out) const {
+    return sample(wo, ng, u.x, u, out);
+  }
+  std::optional<BsdfSample> sample(const glm::vec3& wo, const glm::vec3& ng, glm::vec2 u) const {
+    return sample(wo, ng, u.x, u);
+  }
   // `u_lobe` chooses between reflection and refraction (glass); `u` drives the direction.
   std::optional<BsdfSample> sample(const glm::vec3& wo, const glm::vec3& ng, float u_lobe, glm::vec2 u) const {
+    BsdfSample s;
+    if (!sample(wo, ng, u_lobe, u, s)) return std::nullopt;
+    return s;
+  }
+
+  bool sample(const glm::vec3& wo, const glm::vec3& ng, float u_lobe, glm::vec2 u, BsdfSample& s) const {
     const float cos_o = glm::dot(wo, ng);
-    if (cos_o == 0.0f) return std::nullopt;  // grazing: no side to scatter into
-    if (one_sided_ && cos_o < 0.0f) return std::nullopt;  // the black back of a one-sided surface
+    if (cos_o == 0.0f) return false;  // grazing: no side to scatter into
+    if (one_sided_ && cos_o < 0.0f) return false;  // the black back of a one-sided surface
     switch (kind_) {
       case Kind::Lambertian: {
         const glm::vec3 n = cos_o > 0.0f ? ng : -ng;
         const glm::vec3 local = sample_cosine_hemisphere(u);
-        BsdfSample s;
         s.wi = glm::normalize(Frame::from_normal(n).to_world(local));
         const float cos_i = glm::dot(s.wi, n);
-        if (!(cos_i > 0.0f)) return std::nullopt;
         s.pdf = cos_i * std::numbers::inv_pi_v<float>;
         s.weight = tint_;  // (albedo/pi) cos / (cos/pi)
-        return s;
+        s.delta = false;
+        s.eta_ti = 1.0f;
+        return cos_i > 0.0f;
       }
-      case Kind::Mirror: {
-        BsdfSample s;
+      case Kind::Mirror:
         s.wi = reflect(wo, ng, cos_o);
         s.pdf = 1.0f;
         s.delta = true;
         s.weight = tint_;
-        return s;
-      }
-      case Kind::Dielectric: return sample_dielectric(wo, ng, cos_o, u_lobe);
-      case Kind::Black: return std::nullopt;
+        s.eta_ti = 1.0f;
+        return true;
+      case Kind::Dielectric: sample_dielectric(wo, ng, cos_o, u_lobe, s); return true;
+      case Kind::Black: return false;
     }
-    return std::nullopt;
+    return false;
   }
 
  private:
@@ -117,10 +142,8 @@ class Bsdf {
     return glm::normalize(2.0f * cos_o * n - wo);
   }
 
-  std::optional<BsdfSample> sample_dielectric(const glm::vec3& wo, const glm::vec3& ng, float cos_o,
-                                              float u_lobe) const {
+  void sample_dielectric(const glm::vec3& wo, const glm::vec3& ng, float cos_o, float u_lobe, BsdfSample& s) const {
     const FresnelResult fr = fresnel_dielectric(cos_o, ior_);
-    BsdfSample s;
     s.delta = true;
     // Choosing the lobe with probability F (reflect) or 1 - F (refract) makes the weight exactly 1 for
     // reflection; refraction carries the 1/eta^2 radiance compression of crossing the interface.
@@ -128,7 +151,8 @@ class Bsdf {
       s.wi = reflect(wo, ng, cos_o);
       s.pdf = fr.reflectance;
       s.weight = glm::vec3(1.0f);
-      return s;
+      s.eta_ti = 1.0f;
+      return;
     }
     // Refraction (Snell's law in vector form, with n on the side of wo).
     const glm::vec3 n = cos_o > 0.0f ? ng : -ng;
@@ -138,7 +162,6 @@ class Bsdf {
     s.pdf = 1.0f - fr.reflectance;
     s.eta_ti = eta;
     s.weight = glm::vec3(1.0f / (eta * eta));
-    return s;
   }
 
   Kind kind_ = Kind::Black;

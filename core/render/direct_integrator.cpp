@@ -34,18 +34,17 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Sampler& sampler, Tr
     // The BSDF-sampled segment from the lit vertex exists only to find emission.
     if (lit_vertex_done) break;
     if (settings_.max_depth >= 0 && depth >= settings_.max_depth) break;
-    if (sp.bsdf->is_black()) break;
+    const Bsdf& bsdf = sp.bsdf();
+    if (bsdf.is_black()) break;
 
-    if (!sp.bsdf->is_delta()) {
-      result += throughput * sample_direct_light(ctx_, sp, strategy, sampler, counters);
+    if (!bsdf.is_delta()) {
+      result += throughput * sample_direct_light(ctx_, sp, strategy, sampler.next_2d(), counters);
       lit_vertex_done = true;
       // With light sampling only, the BSDF continuation could only find emission that light sampling
       // cannot produce, and every emitter here can be sampled: skip it.
       if (strategy == SamplingStrategy::Light && ctx_.lights != nullptr) break;
     }
-    const float u_lobe = sampler.next_1d();
-    const glm::vec2 u = sampler.next_2d();
-    const std::optional<BsdfSample> bs = sp.bsdf->sample(sp.wo, sp.ng, u_lobe, u);
+    const std::optional<BsdfSample> bs = bsdf.sample(sp.wo, sp.ng, sampler.next_2d());
     if (!bs || max_component(bs->weight) <= 0.0f) break;
     throughput *= bs->weight;
     prev_delta = bs->delta;

@@ -19,6 +19,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -41,19 +42,23 @@ struct IntegratorSettings {
   SamplingStrategy strategy = SamplingStrategy::Mis;
 };
 
+// What a hit needs to know about the surface of one geometry id, gathered once per render so that shading
+// a hit costs one table lookup (not shape -> material -> BSDF).
+struct GeomShading {
+  Bsdf bsdf;
+  glm::vec3 emission{0.0f};  // radiance an emissive material sends from its front side; 0 otherwise
+  bool emissive = false;
+  bool sphere = false;       // where the geometry lives: scene->geometry.spheres or .meshes ...
+  std::uint32_t shape = 0;   // ... at this index
+};
+
 // Everything an integrator reads. Built once per render, shared by all threads.
 struct SceneContext {
   const Scene* scene = nullptr;
   const Backend* backend = nullptr;
   const EnvironmentLight* environment = nullptr;  // null: rays that escape carry no radiance
   const LightSampler* lights = nullptr;           // null: no light sampling (scene has no emitters)
-  std::vector<Bsdf> bsdf_of_geom;                 // per geometry id
-  // Where the geometry of each id lives: index into scene->geometry.meshes or .spheres.
-  struct ShapeRef {
-    bool sphere = false;
-    std::uint32_t index = 0;
-  };
-  std::vector<ShapeRef> shape_of_geom;
+  std::vector<GeomShading> geoms;                 // per geometry id
 
   static SceneContext make(const Scene& scene, const Backend& backend, const EnvironmentLight* environment,
                            const LightSampler* lights);
@@ -77,6 +82,12 @@ struct FirstHitInfo {
   float depth = 0.0f;      // distance along the (unit) camera ray
 };
 
+// One camera sample: its ray and the sampler that draws all of its random numbers.
+struct CameraSample {
+  Ray ray;          // unit direction
+  Sampler sampler;  // already past the camera's own dimensions
+};
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
@@ -84,6 +95,12 @@ class Integrator {
   // Radiance arriving along `camera_ray` (unit direction). `first`, when not null, receives the first hit.
   virtual glm::vec3 radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters,
                              FirstHitInfo* first) const = 0;
+  // The same for a batch of camera samples: out[i] (and first[i], when `first` is not empty) receives what
+  // radiance() would return for samples[i], bit for bit. The renderer hands over one sample of every pixel
+  // of a tile at a time; an integrator that can advance many paths together (the path integrator) overrides
+  // this, the default calls radiance() for each sample in turn.
+  virtual void radiance(std::span<CameraSample> samples, std::span<glm::vec3> out, std::span<FirstHitInfo> first,
+                        TraceCounters& counters) const;
 };
 
 }  // namespace twinray

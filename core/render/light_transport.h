@@ -18,7 +18,15 @@
 
 #include "core/render/integrator.h"
 
+#include "core/geometry/ray_offset.h"
+#include "core/intersect/sphere_robust.h"
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+
+#include <algorithm>
+#include <limits>
 
 namespace twinray {
 
@@ -29,36 +37,84 @@ struct SurfacePoint {
   glm::vec3 ng{0.0f};  // unit geometric normal, as reported (never flipped)
   glm::vec3 wo{0.0f};  // unit, toward where the ray came from
   float error_scale = 0.0f;  // magnitude of the coordinates p's error comes from (ray_offset.h); 0: p's own
-  const Material* material = nullptr;
-  const Bsdf* bsdf = nullptr;
+  const GeomShading* geom = nullptr;
+
+  const Bsdf& bsdf() const { return geom->bsdf; }
 };
 
-SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit);
+// The surface point of `hit` on `ray`, whose direction must be unit length (camera rays and every ray the
+// integrators spawn are): wo is then -dir without a normalisation.
+inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
+  SurfacePoint sp;
+  sp.ng = hit.ng;
+  sp.wo = -ray.dir;
+  sp.geom = &ctx.geoms[hit.geom_id];
+  if (sp.geom->sphere) {
+    const Sphere& s = ctx.scene->geometry.spheres[sp.geom->shape];
+    // In double and rounded once (sphere_robust.h): center + radius * ng in float is off by ulps of the
+    // center and the radius, enough to start secondary rays inside a large sphere.
+    sp.p = sphere_hit_point(ray.org, ray.dir, hit.t, s.center, s.radius);
+  } else {
+    const TriangleMesh& m = ctx.scene->geometry.meshes[sp.geom->shape];
+    const glm::uvec3 tri = m.indices[hit.prim_id];
+    const glm::vec3 &p0 = m.positions[tri.x], &p1 = m.positions[tri.y], &p2 = m.positions[tri.z];
+    sp.p = (1.0f - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
+    // The barycentric point and the triangle test err by ulps of the vertices, which may be far larger
+    // than the point's own coordinates.
+    const glm::vec3 m3 = glm::max(glm::abs(p0), glm::max(glm::abs(p1), glm::abs(p2)));
+    sp.error_scale = std::max(m3.x, std::max(m3.y, m3.z));
+  }
+  return sp;
+}
 
 // Fills the auxiliary first-hit record (normal facing the viewer, albedo, depth) at the camera ray's hit.
 void record_first_hit(FirstHitInfo* first, const SurfacePoint& sp, float t);
 
-// A ray leaving p along unit direction dir, offset to the side of ng that dir points into.
 // A ray leaving the surface point in direction dir, its origin offset to dir's side (ray_offset.h).
-Ray spawn_ray(const SurfacePoint& sp, const glm::vec3& dir);
+inline Ray spawn_ray(const SurfacePoint& sp, const glm::vec3& dir) {
+  Ray r;
+  r.org = offset_ray_origin(sp.p, glm::dot(dir, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
+  r.dir = dir;
+  r.tmin = 0.0f;
+  r.tmax = std::numeric_limits<float>::infinity();
+  return r;
+}
 
 // The MIS weight of emission reached by a BSDF-sampled ray (or by the camera ray: prev_delta = true),
 // given the BSDF's density for that direction and the light sampler's density for the same direction.
 float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf, float light_pdf);
 
-// One light sample at a non-delta surface point: BSDF * radiance / pdf, MIS weighted against BSDF
-// sampling for the Mis strategy. Traces one shadow ray when the sample can contribute.
+// A light sample waiting for its shadow ray: what it adds when the ray is unoccluded.
+struct ShadowQuery {
+  Ray ray;
+  glm::vec3 contribution{0.0f};  // BSDF * radiance / pdf, MIS weighted
+};
+
+// One light sample at a non-delta surface point, up to its shadow ray: false when the sample cannot
+// contribute (nothing to trace). The contribution is BSDF * radiance / pdf, MIS weighted against BSDF
+// sampling for the Mis strategy. `u` is the sampler's 2D value for the light choice and the point on it.
+bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy, glm::vec2 u,
+                          ShadowQuery& out);
+
+// prepare_direct_light and its shadow ray: the light sample's contribution, 0 when occluded.
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
-                              Sampler& sampler, TraceCounters& counters);
+                              glm::vec2 u, TraceCounters& counters);
 
 // Radiance arriving from outside the scene along unit direction dir, weighted for MIS.
 glm::vec3 escaped_radiance(const SceneContext& ctx, const glm::vec3& dir, SamplingStrategy strategy,
                            bool prev_delta, float prev_bsdf_pdf);
 
-// Emission of the surface at `sp` toward the previous vertex, weighted for MIS.
-glm::vec3 surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
-                           SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
-                           const glm::vec3& prev_p);
+// Emission of the surface at `sp` toward the previous vertex, weighted for MIS. Zero unless the surface
+// emits and `sp.wo` is on its front side.
+glm::vec3 weighted_surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
+                                    SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
+                                    const glm::vec3& prev_p);
+inline glm::vec3 surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
+                                  SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
+                                  const glm::vec3& prev_p) {
+  if (!sp.geom->emissive || !(glm::dot(sp.ng, sp.wo) > 0.0f)) return glm::vec3(0.0f);
+  return weighted_surface_emission(ctx, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
+}
 
 inline float max_component(const glm::vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 

@@ -114,51 +114,77 @@ struct TileTally {
   std::uint64_t negative = 0;
 };
 
+// Adds one sample's radiance to its pixel (NaN/Inf replaced by 0, negative components clamped, both counted).
+void accumulate(Film::PixelSums& px, glm::vec3 L, TileTally& tally) {
+  if (!finite3(L)) {
+    L = glm::vec3(0.0f);
+    ++tally.nonfinite;
+  } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
+    L = glm::max(L, glm::vec3(0.0f));
+    ++tally.negative;
+  }
+  const glm::dvec3 Ld(L);
+  px.sum += Ld;
+  px.sum_sq += Ld * Ld;
+  ++px.samples;
+  ++tally.samples;
+}
+
+void accumulate_first_hit(Film& film, std::size_t idx, const FirstHitInfo& first) {
+  if (!first.hit) return;
+  if (glm::dvec3* n = film.normal_sum(idx)) *n += glm::dvec3(first.normal);
+  if (glm::dvec3* a = film.albedo_sum(idx)) *a += glm::dvec3(first.albedo);
+  if (double* d = film.depth_sum(idx)) {
+    *d += static_cast<double>(first.depth);
+    ++*film.depth_hit_count(idx);
+  }
+}
+
+// Renders samples [sample_begin, sample_end) of every pixel of the tile, one sample of all its pixels at a
+// time (the integrator's batch), each pixel's samples added in sample order.
 void render_tile(const Tile& tile, int sample_begin, int sample_end, const PinholeCamera& camera,
                  const Integrator& integrator, SamplerKind sampler_kind, std::uint64_t seed, Film& film,
                  TileTally& tally) {
   const bool want_first = film.aux().normals || film.aux().albedo || film.aux().depth;
+  // The cost image needs each sample's own traversal cost: samples are then traced one by one.
+  const bool per_sample_cost = film.aux().cost;
   const auto width = static_cast<std::uint64_t>(film.width());
-  for (int y = tile.y0; y < tile.y1; ++y) {
-    for (int x = tile.x0; x < tile.x1; ++x) {
-      const std::uint64_t pixel_index = static_cast<std::uint64_t>(y) * width + static_cast<std::uint64_t>(x);
-      const auto idx = static_cast<std::size_t>(pixel_index);
-      Film::PixelSums& px = film.pixel(idx);
-      for (int s = sample_begin; s < sample_end; ++s) {
+  const std::size_t n = static_cast<std::size_t>(tile.x1 - tile.x0) * static_cast<std::size_t>(tile.y1 - tile.y0);
+  std::vector<CameraSample> batch;
+  batch.reserve(n);
+  std::vector<glm::vec3> radiance(n);
+  std::vector<FirstHitInfo> first(want_first ? n : 0);
+  std::vector<std::size_t> pixel(n);
+  for (int s = sample_begin; s < sample_end; ++s) {
+    batch.clear();
+    for (int y = tile.y0; y < tile.y1; ++y)
+      for (int x = tile.x0; x < tile.x1; ++x) {
+        const std::uint64_t pixel_index = static_cast<std::uint64_t>(y) * width + static_cast<std::uint64_t>(x);
+        pixel[batch.size()] = static_cast<std::size_t>(pixel_index);
         Sampler sampler(sampler_kind, seed, pixel_index, static_cast<std::uint32_t>(s));
         const glm::vec2 jitter = sampler.next_2d();
         const Ray ray = camera.generate_ray((static_cast<float>(x) + jitter.x) / static_cast<float>(camera.width()),
                                             1.0f - (static_cast<float>(y) + jitter.y) / static_cast<float>(camera.height()));
+        batch.push_back(CameraSample{ray, sampler});
+      }
+    if (want_first) std::fill(first.begin(), first.end(), FirstHitInfo{});
+    if (!per_sample_cost) {
+      integrator.radiance(std::span(batch), std::span(radiance), std::span(first), tally.counters);
+    } else {
+      for (std::size_t k = 0; k < n; ++k) {
         const QueryStats before = tally.counters.query;
         const std::uint64_t rays_before = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
-        FirstHitInfo first;
-        glm::vec3 L = integrator.radiance(ray, sampler, tally.counters, want_first ? &first : nullptr);
-        if (!finite3(L)) {
-          L = glm::vec3(0.0f);
-          ++tally.nonfinite;
-        } else if (L.x < 0.0f || L.y < 0.0f || L.z < 0.0f) {
-          L = glm::max(L, glm::vec3(0.0f));
-          ++tally.negative;
-        }
-        const glm::dvec3 Ld(L);
-        px.sum += Ld;
-        px.sum_sq += Ld * Ld;
-        ++px.samples;
-        ++tally.samples;
-        if (glm::dvec3* n = film.normal_sum(idx); n && first.hit) *n += glm::dvec3(first.normal);
-        if (glm::dvec3* a = film.albedo_sum(idx); a && first.hit) *a += glm::dvec3(first.albedo);
-        if (double* d = film.depth_sum(idx); d && first.hit) {
-          *d += static_cast<double>(first.depth);
-          ++*film.depth_hit_count(idx);
-        }
-        if (glm::dvec3* c = film.cost_sum(idx)) {
-          const QueryStats& after = tally.counters.query;
-          const std::uint64_t rays_after = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
-          *c += glm::dvec3(static_cast<double>(after.nodes_visited - before.nodes_visited),
-                           static_cast<double>(after.primitives_tested - before.primitives_tested),
-                           static_cast<double>(rays_after - rays_before));
-        }
+        radiance[k] = integrator.radiance(batch[k].ray, batch[k].sampler, tally.counters, want_first ? &first[k] : nullptr);
+        const QueryStats& after = tally.counters.query;
+        const std::uint64_t rays_after = tally.counters.closest_hit_rays + tally.counters.shadow_rays;
+        *film.cost_sum(pixel[k]) += glm::dvec3(static_cast<double>(after.nodes_visited - before.nodes_visited),
+                                               static_cast<double>(after.primitives_tested - before.primitives_tested),
+                                               static_cast<double>(rays_after - rays_before));
       }
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      accumulate(film.pixel(pixel[k]), radiance[k], tally);
+      if (want_first) accumulate_first_hit(film, pixel[k], first[k]);
     }
   }
 }

@@ -36,7 +36,7 @@ std::optional<SamplerKind> parse_sampler_kind(std::string_view name);
 class Sampler {
  public:
   Sampler(SamplerKind kind, std::uint64_t seed, std::uint64_t pixel, std::uint32_t sample)
-      : kind_(kind), sample_(sample) {
+      : kind_(kind), reversed_sample_(sobol::reverse_bits(sample)) {
     if (kind == SamplerKind::Independent) rng_ = Rng::keyed(seed, pixel, sample);
     else pixel_key_ = mix64(seed ^ mix64(pixel + 0x51ed270b27a1e5d3ull));
   }
@@ -47,11 +47,19 @@ class Sampler {
   float next_1d() {
     if (kind_ == SamplerKind::Independent) return rng_.next_float();
     const std::uint64_t h = dimension_hash();
-    const std::uint32_t index = sobol::nested_uniform_scramble(sample_, static_cast<std::uint32_t>(h));
-    return sobol::to_unit_float(sobol::nested_uniform_scramble(sobol::dimension0(index), static_cast<std::uint32_t>(h >> 32)));
+    const std::uint32_t index = sobol::reverse_bits(shuffle_reversed(h));
+    return sobol::to_unit_float(sobol::reverse_bits(sobol::laine_karras_permutation(index, static_cast<std::uint32_t>(h >> 32))));
   }
 
   // The next dimension: a point in [0, 1)^2.
+  //
+  // In the words of sobol.h, with index = nested_uniform_scramble(sample, seed0):
+  //   x = nested_uniform_scramble(dimension0(index), seed1), y = nested_uniform_scramble(dimension1(index), seed2).
+  // Written out, nested_uniform_scramble(v) = reverse(LK(reverse(v))) and dimension0 = reverse, so pairs of
+  // reversals cancel: with z = LK(reverse(sample), seed0) (the index, bit-reversed),
+  //   index = reverse(z), x = reverse(LK(index, seed1)), y = reverse(LK(reverse(dimension1(reverse(z))), seed2)),
+  // the last inner term read from a table (sobol::reversed_dimension1_of_reversed). Three bit reversals
+  // instead of seven, and reverse(sample) is computed once per camera sample; the values are the same bits.
   glm::vec2 next_2d() {
     if (kind_ == SamplerKind::Independent) {
       const float x = rng_.next_float();
@@ -60,9 +68,11 @@ class Sampler {
     }
     const std::uint64_t h = dimension_hash();
     const std::uint64_t h2 = mix64(h);
-    const std::uint32_t index = sobol::nested_uniform_scramble(sample_, static_cast<std::uint32_t>(h));
-    const std::uint32_t x = sobol::nested_uniform_scramble(sobol::dimension0(index), static_cast<std::uint32_t>(h >> 32));
-    const std::uint32_t y = sobol::nested_uniform_scramble(sobol::dimension1(index), static_cast<std::uint32_t>(h2));
+    const std::uint32_t z = shuffle_reversed(h);
+    const std::uint32_t index = sobol::reverse_bits(z);
+    const std::uint32_t x = sobol::reverse_bits(sobol::laine_karras_permutation(index, static_cast<std::uint32_t>(h >> 32)));
+    const std::uint32_t y = sobol::reverse_bits(
+        sobol::laine_karras_permutation(sobol::reversed_dimension1_of_reversed(z), static_cast<std::uint32_t>(h2)));
     return {sobol::to_unit_float(x), sobol::to_unit_float(y)};
   }
 
@@ -71,9 +81,13 @@ class Sampler {
 
  private:
   std::uint64_t dimension_hash() { return mix64(pixel_key_ + 0x9E3779B97F4A7C15ull * ++dimension_); }
+  // The dimension's shuffled sample index, bit-reversed: LK(reverse(sample), seed) (see next_2d).
+  std::uint32_t shuffle_reversed(std::uint64_t h) const {
+    return sobol::laine_karras_permutation(reversed_sample_, static_cast<std::uint32_t>(h));
+  }
 
   SamplerKind kind_;
-  std::uint32_t sample_ = 0;
+  std::uint32_t reversed_sample_ = 0;  // Sobol only
   std::uint32_t dimension_ = 0;
   std::uint64_t pixel_key_ = 0;
   Rng rng_;

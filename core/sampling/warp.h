@@ -25,22 +25,34 @@ inline constexpr float kInv4Pi = 0.25f * std::numbers::inv_pi_v<float>;
 // exact arithmetic (e.g. 1 - z^2 with |z| rounded to just above 1).
 inline float safe_sqrt(float x) { return std::sqrt(std::max(x, 0.0f)); }
 
+// sin and cos of x for |x| <= pi/4, by their Taylor polynomials of degree 9 and 10: the first omitted
+// terms, x^11/11! and x^12/12!, are below 2e-9 there, under a float ulp of the results, so the values are
+// as good as libm's (a few ulps of rounding in the evaluation) without a call, a range reduction or a
+// branch on the argument. Used by the concentric map, whose angles stay within a quarter turn.
+inline void sin_cos_quarter(float x, float& sin_x, float& cos_x) {
+  const float x2 = x * x;
+  sin_x = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f)))));
+  cos_x = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
+}
+
 // Shirley–Chiu concentric map from [0,1)^2 to the unit disk. Unlike the polar map (r = sqrt(u0)) it keeps
 // neighbouring square cells neighbours on the disk with little shape distortion, so stratified or
 // low-discrepancy points stay well spread after warping.
+//
+// Branch-free: which wedge a point falls in is a coin toss for random u, and a mispredicted branch costs
+// more than computing both candidates and selecting one.
 inline glm::vec2 sample_concentric_disk(glm::vec2 u) {
   const float a = 2.0f * u.x - 1.0f;
   const float b = 2.0f * u.y - 1.0f;
-  if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
-  float r, phi;
-  if (std::abs(a) > std::abs(b)) {
-    r = a;
-    phi = (kPi / 4.0f) * (b / a);
-  } else {
-    r = b;
-    phi = (kPi / 2.0f) - (kPi / 4.0f) * (a / b);
-  }
-  return r * glm::vec2(std::cos(phi), std::sin(phi));
+  // The angle is phi = pi/4 (b/a) in the wedges around the x axis and pi/2 - pi/4 (a/b) in those around
+  // the y axis, where cos(phi) = sin(pi/4 (a/b)) and sin(phi) = cos(pi/4 (a/b)).
+  const bool x_wedge = std::abs(a) > std::abs(b);
+  const float num = x_wedge ? b : a;
+  const float den = x_wedge ? a : b;
+  const float r = den;
+  float s, c;
+  sin_cos_quarter(den != 0.0f ? (kPi / 4.0f) * (num / den) : 0.0f, s, c);
+  return x_wedge ? glm::vec2(r * c, r * s) : glm::vec2(r * s, r * c);
 }
 
 // Malley's method: a uniform disk point lifted onto the hemisphere is cosine distributed.
@@ -96,14 +108,11 @@ inline float uniform_cone_pdf(float cos_theta_max) { return uniform_cone_pdf_one
 // square into two triangles (Heitz 2019) instead of the classic sqrt fold: no sqrt, and nearby u map to
 // nearby points, which keeps stratification. b2 is formed last as 1 - b0 - b1 so the three always sum to 1.
 inline glm::vec3 sample_uniform_triangle(glm::vec2 u) {
-  float b0, b1;
-  if (u.x < u.y) {
-    b0 = 0.5f * u.x;
-    b1 = u.y - b0;
-  } else {
-    b1 = 0.5f * u.y;
-    b0 = u.x - b1;
-  }
+  // Both halves computed, one selected (no branch on a coin toss).
+  const bool lower = u.x < u.y;
+  const float h = 0.5f * (lower ? u.x : u.y);
+  const float b0 = lower ? h : u.x - h;
+  const float b1 = lower ? u.y - h : h;
   return glm::vec3(b0, b1, 1.0f - b0 - b1);
 }
 
