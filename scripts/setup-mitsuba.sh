@@ -10,8 +10,8 @@
 # rule as the reference cache, harness/converge/reference_cache.h). TWINRAY_MITSUBA_VENV overrides the
 # folder. twinray finds it there by itself; scripts/mitsuba_render.py runs inside it.
 #
-# Not part of scripts/test.sh or .ci/run: the packages are ~150 MB to download, and the tests that need
-# Mitsuba skip with a message naming this script when it is absent (docs/mitsuba.md).
+# Not part of scripts/test.sh (the packages are ~150 MB to download, and the tests that need Mitsuba skip with
+# a message naming this script when it is absent, docs/mitsuba.md); .ci/run calls it before the suites.
 set -euo pipefail
 
 MITSUBA_VERSION=3.9.1
@@ -20,12 +20,15 @@ venv="${TWINRAY_MITSUBA_VENV:-$cache/mitsuba-venv}"
 
 # LLVM 19 from Debian 12's archive (libLLVM.so.19.1): only the llvm_* variants need it; scalar_rgb works
 # without it.
-if ! dpkg-query -W -f='${Status}' libllvm19 2>/dev/null | grep -q "install ok installed"; then
-  echo "setup-mitsuba: installing libllvm19" >&2
+# python3-venv: Debian's python3 creates virtual environments only with it.
+installed() { dpkg-query -W -f='${Status}' "$1" 2>/dev/null | grep -q "install ok installed"; }
+if ! installed libllvm19 || ! installed python3-venv; then
+  echo "setup-mitsuba: installing libllvm19 and python3-venv" >&2
   SUDO=""
   if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
   export DEBIAN_FRONTEND=noninteractive
   $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends python3-venv >/dev/null
   $SUDO apt-get install -y -qq --no-install-recommends libllvm19 >/dev/null || \
     echo "setup-mitsuba: libllvm19 could not be installed: only the scalar_rgb variant will work" >&2
 fi
