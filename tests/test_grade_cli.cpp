@@ -98,7 +98,12 @@ TEST(TraceCli, AnswersSideBySideWithVisitOrderAndJson) {
     EXPECT_EQ(b.at("closest").at("t_hex"), "0x1.8p+1") << b;
     EXPECT_EQ(b.at("closest").at("prim_id"), 0) << b;
     EXPECT_TRUE(b.at("occluded").get<bool>()) << b;
+    if (b.at("name") != "bvh") {
+      EXPECT_EQ(b.at("t_ulps_from_reference"), 0) << b;  // the same primitive and t as bvh
+    }
   }
+  EXPECT_NE(r.output.find("vs bvh: closest hit identical (the same t as bvh), any-hit agree"), std::string::npos)
+      << r.output;
   // bvh lists the nodes it entered, root first; a counting plugin its counts.
   const auto& visits = j.at("backends")[0].at("visits").at("closest");
   ASSERT_FALSE(visits.empty());

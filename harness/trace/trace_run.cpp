@@ -2,6 +2,7 @@
 
 #include "backends/bvh/bvh_backend.h"
 #include "backends/registry.h"
+#include "core/util/float_ulps.h"
 #include "core/util/fp_mode.h"
 #include "core/util/input_error.h"
 #include "harness/crosscheck/hit_comparison.h"
@@ -179,7 +180,18 @@ TraceReport run_trace(const TraceSettings& settings) {
                                                                std::span<const std::uint8_t>(&ob, 1));
       const std::string closest = c.identical ? "identical" : c.edge ? "edge" : c.tie ? "tie" : "genuine";
       const std::string any = c.occlusion_agree ? "agree" : c.occlusion_edge ? "edge" : "genuine";
-      out += fmt::format("  vs {}: closest hit {}, any-hit {}\n", base.name, closest, any);
+      // Hits on the same primitive: how far apart their t are, in floats. "identical" allows a tolerance
+      // (hit_comparison.h); against `exact` this says whether a backend's t is the correctly rounded one.
+      std::string t_note;
+      const bool same_primitive = base.hit.found() && a.hit.found() && base.hit.geom_id == a.hit.geom_id &&
+                                  base.hit.prim_id == a.hit.prim_id && std::isfinite(base.hit.t) && std::isfinite(a.hit.t);
+      if (same_primitive) {
+        const std::int64_t ulps = float_ulp_distance(a.hit.t, base.hit.t);
+        j["t_ulps_from_reference"] = ulps;
+        t_note = ulps == 0 ? fmt::format(" (the same t as {})", base.name)
+                           : fmt::format(" (t {} ulp{} from {}'s)", ulps, ulps == 1 ? "" : "s", base.name);
+      }
+      out += fmt::format("  vs {}: closest hit {}{}, any-hit {}\n", base.name, closest, t_note, any);
       j["against"] = base.name;
       j["closest_comparison"] = closest;
       j["any_comparison"] = any;
