@@ -198,6 +198,10 @@ class IsolatedPluginBackend::Impl {
                                  std::chrono::duration<double> per_call);
   [[noreturn]] void fail_from_status(const Lease& lease, Stage stage);
   [[noreturn]] void fail_bad_hit(const Lease& lease, Stage stage, std::size_t request_index, const twinray_hit& h);
+  // The batch loop shared by intersect and occluded: `miss(i)` resets the answer of ray i, `take(lease, k, i,
+  // result)` stores the answer of request slot k (a copy) for ray i.
+  template <typename Miss, typename Take>
+  void query_in_chunks(std::span<const Ray> rays, pw::Op op, Stage stage, QueryStats* stats, Miss miss, Take take);
   PluginFailure failure_for(int channel) const;
   void throw_if_failed() const;
   // The ray at `request_index` of the channel's current request: its index in the caller's span and its value.
@@ -718,8 +722,9 @@ bool IsolatedPluginBackend::Impl::occluded(const Ray& ray, QueryStats* stats) {
 
 // A batch runs on one channel, in chunks of up to kChunkRays valid rays (invalid rays are misses and never
 // sent), like the in-process backend runs it on the calling thread.
-void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) {
-  assert(rays.size() == hits.size());
+template <typename Miss, typename Take>
+void IsolatedPluginBackend::Impl::query_in_chunks(std::span<const Ray> rays, pw::Op op, Stage stage, QueryStats* stats,
+                                                  Miss miss, Take take) {
   throw_if_failed();
   std::uint64_t nodes = 0, primitives = 0;
   Lease lease(*this);
@@ -729,56 +734,42 @@ void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span
   while (i < rays.size()) {
     std::uint32_t n = 0;
     for (; i < rays.size() && n < pw::kChunkRays; ++i) {
-      hits[i] = Hit{};
+      miss(i);
       if (!is_valid_ray(rays[i])) continue;
       c.rays[n] = to_plugin_ray(rays[i]);
       source[n++] = i;
     }
     if (n == 0) continue;
-    c.op = pw::Op::Intersect;
+    c.op = op;
     c.count = n;
-    set_context(lease, RequestContext{true, Stage::Intersect, rays, source.data(), n});
+    set_context(lease, RequestContext{true, stage, rays, source.data(), n});
     round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
-    if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Intersect);
+    if (c.status != pw::Status::Ok) fail_from_status(lease, stage);
     nodes += c.nodes_visited;
     primitives += c.primitives_tested;
-    for (std::uint32_t k = 0; k < n; ++k) {
-      const pw::RayResult r = c.results[k];
-      if (r.found == 0) continue;
-      if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
-      hits[source[k]] = from_plugin_hit(r.hit);
-    }
+    // Each result is copied out of the shared memory once: the plugin's process could still write to it
+    // between a check and a use.
+    for (std::uint32_t k = 0; k < n; ++k) take(lease, k, source[k], pw::RayResult(c.results[k]));
   }
   add_stats(stats, rays.size(), nodes, primitives);
 }
 
+void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) {
+  assert(rays.size() == hits.size());
+  query_in_chunks(
+      rays, pw::Op::Intersect, Stage::Intersect, stats, [&](std::size_t i) { hits[i] = Hit{}; },
+      [&](const Lease& lease, std::uint32_t k, std::size_t i, pw::RayResult r) {
+        if (r.found == 0) return;
+        if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
+        hits[i] = from_plugin_hit(r.hit);
+      });
+}
+
 void IsolatedPluginBackend::Impl::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) {
   assert(rays.size() == occluded.size());
-  throw_if_failed();
-  std::uint64_t nodes = 0, primitives = 0;
-  Lease lease(*this);
-  pw::Channel& c = lease.channel();
-  std::array<std::size_t, pw::kChunkRays>& source = lease.slot().source;
-  std::size_t i = 0;
-  while (i < rays.size()) {
-    std::uint32_t n = 0;
-    for (; i < rays.size() && n < pw::kChunkRays; ++i) {
-      occluded[i] = 0;
-      if (!is_valid_ray(rays[i])) continue;
-      c.rays[n] = to_plugin_ray(rays[i]);
-      source[n++] = i;
-    }
-    if (n == 0) continue;
-    c.op = pw::Op::Occluded;
-    c.count = n;
-    set_context(lease, RequestContext{true, Stage::Occluded, rays, source.data(), n});
-    round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
-    if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Occluded);
-    nodes += c.nodes_visited;
-    primitives += c.primitives_tested;
-    for (std::uint32_t k = 0; k < n; ++k) occluded[source[k]] = c.results[k].found != 0 ? 1 : 0;
-  }
-  add_stats(stats, rays.size(), nodes, primitives);
+  query_in_chunks(
+      rays, pw::Op::Occluded, Stage::Occluded, stats, [&](std::size_t i) { occluded[i] = 0; },
+      [&](const Lease&, std::uint32_t, std::size_t i, pw::RayResult r) { occluded[i] = r.found != 0 ? 1 : 0; });
 }
 
 void IsolatedPluginBackend::Impl::shutdown() {
