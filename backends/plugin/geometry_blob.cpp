@@ -1,4 +1,5 @@
 #include "backends/plugin/geometry_blob.h"
+#include "backends/plugin/plugin_hit.h"
 
 #include "backends/plugin/worker_protocol.h"
 
@@ -63,13 +64,7 @@ void write_geometry_blob(const SceneGeometry& g, void* destination) {
     if (!mesh.indices.empty()) std::memcpy(base + indices, mesh.indices.data(), mesh.indices.size() * sizeof(glm::uvec3));
   });
   for (std::size_t k = 0; k < g.spheres.size(); ++k) {
-    const Sphere& s = g.spheres[k];
-    twinray_sphere ps;
-    ps.geom_id = s.geom_id;
-    ps.center[0] = s.center.x;
-    ps.center[1] = s.center.y;
-    ps.center[2] = s.center.z;
-    ps.radius = s.radius;
+    const twinray_sphere ps = to_plugin_sphere(g.spheres[k]);
     std::memcpy(spheres + k * sizeof(twinray_sphere), &ps, sizeof ps);
   }
 }

@@ -120,15 +120,7 @@ void PluginBackend::build(const SceneGeometry& geometry) {
     pm.triangle_count = m.indices.size();
     meshes_.push_back(pm);
   }
-  for (const Sphere& s : geometry.spheres) {
-    twinray_sphere ps;
-    ps.geom_id = s.geom_id;
-    ps.center[0] = s.center.x;
-    ps.center[1] = s.center.y;
-    ps.center[2] = s.center.z;
-    ps.radius = s.radius;
-    spheres_.push_back(ps);
-  }
+  for (const Sphere& s : geometry.spheres) spheres_.push_back(to_plugin_sphere(s));
   twinray_geometry g;
   g.meshes = meshes_.data();
   g.mesh_count = meshes_.size();

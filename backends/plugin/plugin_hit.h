@@ -31,6 +31,16 @@ inline twinray_ray to_plugin_ray(const Ray& r) {
   return p;
 }
 
+inline twinray_sphere to_plugin_sphere(const Sphere& s) {
+  twinray_sphere p;
+  p.geom_id = s.geom_id;
+  p.center[0] = s.center.x;
+  p.center[1] = s.center.y;
+  p.center[2] = s.center.z;
+  p.radius = s.radius;
+  return p;
+}
+
 inline twinray_hit plugin_miss() {
   twinray_hit h{};
   h.geom_id = TWINRAY_INVALID_ID;
