@@ -72,6 +72,16 @@ struct Arbiter::Impl {
     return false;
   }
 
+  // The first exact hit among `candidates` that no perturbation within the tolerances can make the ray miss,
+  // or nullptr when every one can be missed (then `why` is the reason of the last, Edge when there is none).
+  const Candidate* unavoidable_hit(const std::vector<Candidate>& candidates, const Ray& ray, double dir_length,
+                                   bool watertight, Reason& why) const {
+    why = Reason::Edge;
+    for (const Candidate& c : candidates)
+      if (c.hit && !avoidable(c, ray, dir_length, watertight, why)) return &c;
+    return nullptr;
+  }
+
   // Whether the ray reaches `c` at a t within tolerance of [tmin, tmax] (any crossing, counted or not).
   static bool reaches_interval(const Candidate& c, const Ray& ray, double dir_length) {
     const double tol = c.t_tolerance(dir_length);
@@ -148,10 +158,9 @@ Ruling Arbiter::rule_closest(const Ray& ray, const Hit& answer, const BackendTra
   if (!answer.found()) {
     if (!r.exact.found()) return r;
     Reason why = Reason::Edge;
-    for (const Candidate& c : candidates)
-      if (c.hit && !impl_->avoidable(c, ray, dir_length, traits.watertight, why))
-        return wrong(r, Reason::MissedHit,
-                     fmt::format("the exact ray crosses {} at t={:.9g} away from its edges", describe_primitive(c), c.t));
+    if (const Candidate* c = impl_->unavoidable_hit(candidates, ray, dir_length, traits.watertight, why))
+      return wrong(r, Reason::MissedHit,
+                   fmt::format("the exact ray crosses {} at t={:.9g} away from its edges", describe_primitive(*c), c->t));
     r.reason = why;
     r.detail = fmt::format("the exact hit (geom {} prim {} at t={:.9g}) can be missed", r.exact.geom_id, r.exact.prim_id,
                            r.exact.t);
@@ -241,10 +250,9 @@ Ruling Arbiter::rule_occluded(const Ray& ray, bool answer, const BackendTraits& 
     return wrong(r, Reason::HitNotThere, "the exact ray reaches no primitive within [tmin, tmax]");
   }
   Reason why = Reason::Edge;
-  for (const Candidate& c : candidates)
-    if (c.hit && !impl_->avoidable(c, ray, dir_length, traits.watertight, why))
-      return wrong(r, Reason::MissedHit,
-                   fmt::format("the exact ray crosses {} at t={:.9g} away from its edges", describe_primitive(c), c.t));
+  if (const Candidate* c = impl_->unavoidable_hit(candidates, ray, dir_length, traits.watertight, why))
+    return wrong(r, Reason::MissedHit,
+                 fmt::format("the exact ray crosses {} at t={:.9g} away from its edges", describe_primitive(*c), c->t));
   r.reason = why;
   r.detail = fmt::format("every exact hit can be missed (closest: geom {} prim {} at t={:.9g})", r.exact.geom_id,
                          r.exact.prim_id, r.exact.t);
