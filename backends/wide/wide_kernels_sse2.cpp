@@ -73,10 +73,4 @@ inline unsigned leaf_children(const WideNode& node) {
 #include "backends/wide/wide_traversal.inl"
 #undef TWINRAY_KERNEL
 
-WideKernels kernels(bool triangles, bool spheres) {
-  if (triangles && spheres) return {&wide_intersect<true, true>, &wide_occluded<true, true>};
-  if (spheres) return {&wide_intersect<false, true>, &wide_occluded<false, true>};
-  return {&wide_intersect<true, false>, &wide_occluded<true, false>};
-}
-
 }  // namespace twinray::wide_sse2

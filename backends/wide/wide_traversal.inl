@@ -17,7 +17,7 @@
 //
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
 // headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes()
-// and leaf_children() for its instruction set.
+// and leaf_children() for its instruction set; it defines the namespace's kernels() (wide_kernels.h).
 
 namespace wide_detail {
 
@@ -247,4 +247,11 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
     stats->primitives_tested += prims_tested;
   }
   return found;
+}
+
+// The entry points of this instruction set's kernels (wide_kernels.h).
+WideKernels kernels(bool triangles, bool spheres) {
+  if (triangles && spheres) return {&wide_intersect<true, true>, &wide_occluded<true, true>};
+  if (spheres) return {&wide_intersect<false, true>, &wide_occluded<false, true>};
+  return {&wide_intersect<true, false>, &wide_occluded<true, false>};
 }

@@ -1,0 +1,47 @@
+// The 256-bit slab test of the AVX2 and AVX-512 wide kernels: each node's eight boxes in one register per
+// plane. The two instruction sets run the same arithmetic and differ only in how a comparison becomes a
+// bit mask (AVX2: a vector compare and movemask; AVX-512: a compare straight into a mask register), which
+// the including file supplies as cmp_le_mask() and sign_mask().
+//
+// No include guard: wide_kernels_avx2.cpp and wide_kernels_avx512.cpp include this file once, inside their
+// own namespace, after defining TWINRAY_KERNEL (the target attribute), cmp_le_mask(a, b) (bit s set when
+// a[s] <= b[s], false for NaN) and sign_mask(v) (bit s = the sign bit of 32-bit lane s).
+
+// The ray as the slab test needs it; see wide_kernels_sse2.cpp.
+struct WideBoxRay {
+  __m256 org[3], inv[3];
+  std::size_t near_row[3], far_row[3];
+
+  TWINRAY_KERNEL explicit WideBoxRay(const Ray& ray) {
+    for (int a = 0; a < 3; ++a) {
+      const float inv_dir = 1.0f / ray.dir[a];
+      org[a] = _mm256_set1_ps(ray.org[a]);
+      inv[a] = _mm256_set1_ps(inv_dir);
+      const bool negative = std::signbit(inv_dir);
+      near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
+      far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
+    }
+  }
+};
+
+// Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling).
+TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
+                                          float* entry) {
+  const float* rows = &node.lo[0][0];
+  __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
+  const __m256 scale = _mm256_set1_ps(kSlabFarScale);
+  for (int a = 0; a < 3; ++a) {
+    const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.near_row[a]), r.org[a]), r.inv[a]);
+    const __m256 t_far =
+        _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.far_row[a]), r.org[a]), r.inv[a]), scale);
+    t0 = _mm256_max_ps(t_near, t0);
+    t1 = _mm256_min_ps(t_far, t1);
+  }
+  _mm256_store_ps(entry, t0);
+  return cmp_le_mask(t0, t1);
+}
+
+// Bit s set when child slot s is a leaf (the reference's top bit).
+TWINRAY_KERNEL inline unsigned leaf_children(const WideNode& node) {
+  return sign_mask(_mm256_load_si256(reinterpret_cast<const __m256i*>(node.child)));
+}
