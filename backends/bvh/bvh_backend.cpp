@@ -20,15 +20,16 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   const std::size_t n_triangles = geometry.triangle_count();
   BvhTree tree = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_);
 
-  // Leaves appear in depth-first order with increasing ranges of prim_order; each is appended to its
-  // kind's array and its offset rebased to that array (primitive_gather.h).
-  PrimitiveGatherer gather(geometry, prims_);
-  for (BvhNode& node : tree.nodes) {
-    if (!node.is_leaf()) continue;
-    const std::span<const std::uint32_t> ids(tree.prim_order.data() + node.first_prim(), node.prim_count());
-    node.offset = node.is_sphere_leaf() ? gather.append_spheres(ids) : gather.append_triangles(ids);
-  }
-  gather.finish();
+  // Leaves appear in depth-first order with increasing ranges of prim_order; each is copied to its kind's
+  // array in that order and its offset rebased to that array (primitive_gather.h).
+  std::vector<LeafToGather> leaves;
+  leaves.reserve(tree.leaves);
+  for (const BvhNode& node : tree.nodes)
+    if (node.is_leaf()) leaves.push_back({node.first_prim(), node.prim_count(), node.is_sphere_leaf()});
+  const std::vector<std::uint32_t> offsets = gather_leaves(geometry, tree.prim_order, leaves, prims_);
+  std::size_t next_leaf = 0;
+  for (BvhNode& node : tree.nodes)
+    if (node.is_leaf()) node.offset = offsets[next_leaf++];
   nodes_ = std::move(tree.nodes);
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();

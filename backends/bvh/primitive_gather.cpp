@@ -28,51 +28,88 @@ std::vector<Bounds3> primitive_bounds(const SceneGeometry& geometry) {
   return bounds;
 }
 
-PrimitiveGatherer::PrimitiveGatherer(const SceneGeometry& geometry, PrimitiveStore& store)
-    : geometry_(geometry), store_(store) {
-  store_ = PrimitiveStore{};
-  triangle_source_.reserve(geometry.triangle_count());
-  for (const TriangleMesh& mesh : geometry.meshes)
-    for (std::size_t i = 0; i < mesh.indices.size(); ++i)
-      triangle_source_.push_back({&mesh, static_cast<std::uint32_t>(i)});
-  // Blocks: at least one per four triangles, more where leaves leave lanes empty.
-  store_.triangle_blocks.reserve(geometry.triangle_count() / 2 + 1);
-  store_.triangle_keys.reserve(2 * geometry.triangle_count() + 4);
-  store_.spheres.reserve(geometry.sphere_count());
-  store_.sphere_keys.reserve(geometry.sphere_count());
-}
+namespace {
 
-std::uint32_t PrimitiveGatherer::append_triangles(std::span<const std::uint32_t> ids) {
-  const auto first = static_cast<std::uint32_t>(store_.triangle_keys.size());
-  const auto count = static_cast<std::uint32_t>(ids.size());
+// Triangle primitive id -> (mesh, index in mesh): ids number the meshes' triangles one mesh after another,
+// so the mesh is found by a binary search over their first ids (no per-triangle table to build).
+class TriangleIds {
+ public:
+  explicit TriangleIds(const SceneGeometry& geometry) : geometry_(geometry) {
+    first_.reserve(geometry.meshes.size() + 1);
+    std::uint32_t at = 0;
+    for (const TriangleMesh& mesh : geometry.meshes) {
+      first_.push_back(at);
+      at += static_cast<std::uint32_t>(mesh.indices.size());
+    }
+    first_.push_back(at);
+  }
+  std::uint32_t triangle_count() const { return first_.back(); }
+  // The mesh holding triangle `id` (< triangle_count()) and the triangle's index in it. Empty meshes share
+  // their first id with the next one; upper_bound skips them.
+  const TriangleMesh& mesh_of(std::uint32_t id, std::uint32_t& index) const {
+    const auto m = static_cast<std::size_t>(std::upper_bound(first_.begin(), first_.end(), id) - first_.begin()) - 1;
+    index = id - first_[m];
+    return geometry_.meshes[m];
+  }
+
+ private:
+  const SceneGeometry& geometry_;
+  std::vector<std::uint32_t> first_;
+};
+
+void copy_triangle_leaf(const TriangleIds& ids, std::span<const std::uint32_t> leaf, std::uint32_t first_slot,
+                        PrimitiveStore& store) {
+  const auto count = static_cast<std::uint32_t>(leaf.size());
   const std::uint32_t slots = (count + kTriangleBlockLanes - 1) / kTriangleBlockLanes * kTriangleBlockLanes;
   for (std::uint32_t j = 0; j < slots; ++j) {
-    const std::uint32_t lane = j % kTriangleBlockLanes;
-    if (lane == 0) store_.triangle_blocks.emplace_back();
-    const TriangleSource& src = triangle_source_[ids[std::min(j, count - 1)]];
-    const glm::uvec3& tri = src.mesh->indices[src.index];
-    const std::vector<glm::vec3>& p = src.mesh->positions;
-    store_.triangle_blocks.back().set(lane, p[tri.x], p[tri.y], p[tri.z]);
-    store_.triangle_keys.push_back(j < count ? PrimitiveKey{src.mesh->geom_id, src.index}
-                                             : PrimitiveKey{PrimitiveKey::kPadding, PrimitiveKey::kPadding});
+    std::uint32_t index = 0;
+    const TriangleMesh& mesh = ids.mesh_of(leaf[std::min(j, count - 1)], index);
+    const glm::uvec3& tri = mesh.indices[index];
+    const std::uint32_t slot = first_slot + j;
+    store.triangle_blocks[slot / kTriangleBlockLanes].set(slot % kTriangleBlockLanes, mesh.positions[tri.x],
+                                                          mesh.positions[tri.y], mesh.positions[tri.z]);
+    store.triangle_keys[slot] = j < count ? PrimitiveKey{mesh.geom_id, index}
+                                          : PrimitiveKey{PrimitiveKey::kPadding, PrimitiveKey::kPadding};
   }
-  return first;
 }
 
-std::uint32_t PrimitiveGatherer::append_spheres(std::span<const std::uint32_t> ids) {
-  const auto first = static_cast<std::uint32_t>(store_.spheres.size());
-  const std::size_t n_triangles = triangle_source_.size();
-  for (const std::uint32_t id : ids) {
-    const Sphere& s = geometry_.spheres[id - n_triangles];
-    store_.spheres.push_back({s.center, s.radius});
-    store_.sphere_keys.push_back({s.geom_id, 0});
-  }
-  return first;
-}
+}  // namespace
 
-void PrimitiveGatherer::finish() {
-  store_.triangle_blocks.shrink_to_fit();
-  store_.triangle_keys.shrink_to_fit();
+std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::span<const std::uint32_t> prim_order,
+                                         std::span<const LeafToGather> leaves, PrimitiveStore& store) {
+  const TriangleIds ids(geometry);
+  std::vector<std::uint32_t> offsets(leaves.size());
+  std::uint64_t slots = 0, spheres = 0;
+  for (std::size_t i = 0; i < leaves.size(); ++i) {
+    const LeafToGather& leaf = leaves[i];
+    std::uint64_t& next = leaf.spheres ? spheres : slots;
+    offsets[i] = static_cast<std::uint32_t>(next);
+    next += leaf.spheres ? leaf.count : (leaf.count + kTriangleBlockLanes - 1) / kTriangleBlockLanes * kTriangleBlockLanes;
+  }
+  store = PrimitiveStore{};
+  store.triangle_blocks.resize(slots / kTriangleBlockLanes);
+  store.triangle_keys.resize(slots);
+  store.spheres.resize(spheres);
+  store.sphere_keys.resize(spheres);
+
+  // Leaves write disjoint ranges. A grain of 1024 leaves (a few thousand triangles) keeps the task
+  // overhead small against the copies.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const LeafToGather& leaf = leaves[i];
+      const std::span<const std::uint32_t> leaf_ids = prim_order.subspan(leaf.first, leaf.count);
+      if (!leaf.spheres) {
+        copy_triangle_leaf(ids, leaf_ids, offsets[i], store);
+        continue;
+      }
+      for (std::uint32_t j = 0; j < leaf.count; ++j) {
+        const Sphere& s = geometry.spheres[leaf_ids[j] - ids.triangle_count()];
+        store.spheres[offsets[i] + j] = {s.center, s.radius};
+        store.sphere_keys[offsets[i] + j] = {s.geom_id, 0};
+      }
+    }
+  });
+  return offsets;
 }
 
 }  // namespace twinray

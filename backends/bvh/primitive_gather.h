@@ -15,27 +15,21 @@ namespace twinray {
 // One box per primitive, indexed by primitive id: triangles first (in mesh order), then spheres.
 std::vector<Bounds3> primitive_bounds(const SceneGeometry& geometry);
 
-class PrimitiveGatherer {
- public:
-  // `geometry` must outlive the gatherer; `store` is cleared.
-  PrimitiveGatherer(const SceneGeometry& geometry, PrimitiveStore& store);
-
-  // Appends a leaf of triangles (primitive ids < triangle count) as a run of whole blocks; the last block
-  // is padded with copies of the last triangle, masked off by the traversal. Returns its first slot.
-  std::uint32_t append_triangles(std::span<const std::uint32_t> ids);
-  // Appends a leaf of spheres (primitive ids >= triangle count). Returns its first index in `spheres`.
-  std::uint32_t append_spheres(std::span<const std::uint32_t> ids);
-  // Releases spare capacity once every leaf is in.
-  void finish();
-
- private:
-  struct TriangleSource {
-    const TriangleMesh* mesh;
-    std::uint32_t index;
-  };
-  const SceneGeometry& geometry_;
-  PrimitiveStore& store_;
-  std::vector<TriangleSource> triangle_source_;  // by primitive id
+// A leaf of a finished tree: prim_order[first, first + count), all triangles or all spheres.
+struct LeafToGather {
+  std::uint32_t first;
+  std::uint32_t count;
+  bool spheres;
 };
+
+// Replaces `store` with the leaves' primitives, leaf after leaf in the order given: a triangle leaf as a
+// run of whole blocks (its last block padded with copies of its last triangle, masked off by the
+// traversal), a sphere leaf as a run of spheres. Returns, per leaf, where it starts: the triangle slot of
+// its first block, or its first index in `spheres`.
+//
+// Two passes: the offsets (a prefix sum over the leaves, so every array is allocated once at its final
+// size), then the copies, leaves in parallel. The layout does not depend on the thread count.
+std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::span<const std::uint32_t> prim_order,
+                                         std::span<const LeafToGather> leaves, PrimitiveStore& store);
 
 }  // namespace twinray

@@ -24,19 +24,26 @@ void WideBackend::build(const SceneGeometry& geometry) {
   WideTree tree = collapse_to_wide(binary, options_.collapse);
 
   // Leaves are gathered in the order the nodes name them, so siblings' primitives are neighbours too.
-  PrimitiveGatherer gather(geometry, prims_);
-  for (WideNode& node : tree.nodes) {
+  std::vector<LeafToGather> leaves;
+  leaves.reserve(tree.leaves.size());
+  for (const WideNode& node : tree.nodes)
+    for (const std::uint32_t child : node.child)
+      if (WideRef::is_leaf(child)) {
+        const WideLeafRange& leaf = tree.leaves[child & ~WideRef::kLeafBit];
+        leaves.push_back({leaf.first_prim, leaf.count, leaf.spheres});
+      }
+  const std::vector<std::uint32_t> offsets = gather_leaves(geometry, binary.prim_order, leaves, prims_);
+  std::size_t next_leaf = 0;
+  for (WideNode& node : tree.nodes)
     for (std::uint32_t& child : node.child) {
       if (!WideRef::is_leaf(child)) continue;
-      const WideLeafRange& leaf = tree.leaves[child & ~WideRef::kLeafBit];
-      const std::span<const std::uint32_t> ids(binary.prim_order.data() + leaf.first_prim, leaf.count);
-      const std::uint32_t first = leaf.spheres ? gather.append_spheres(ids) : gather.append_triangles(ids) / kTriangleBlockLanes;
+      const LeafToGather& leaf = leaves[next_leaf];
+      const std::uint32_t first = leaf.spheres ? offsets[next_leaf] : offsets[next_leaf] / kTriangleBlockLanes;
+      ++next_leaf;
       if (first > WideRef::kFirstMask)
         throw std::length_error("bvh8: too many primitives for 25-bit leaf references (at most 2^25 blocks)");
       child = WideRef::leaf(first, leaf.count, leaf.spheres);
     }
-  }
-  gather.finish();
   nodes_ = std::move(tree.nodes);
   nodes_.shrink_to_fit();
   bounds_ = binary.nodes.empty() ? Bounds3{} : Bounds3{binary.nodes[0].lo, binary.nodes[0].hi};
