@@ -15,13 +15,14 @@ bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.
 }  // namespace
 
 LightTracer::LightTracer(const SceneContext& ctx, const IntegratorSettings& settings, const PinholeCamera& camera,
-                         SamplerKind sampler, std::uint64_t seed)
+                         SamplerKind sampler, std::uint64_t seed, LightPathSet paths)
     : ctx_(ctx),
       settings_(settings),
       camera_(camera),
       sampler_(sampler),
       seed_(seed),
-      pixel_count_(static_cast<std::uint64_t>(camera.width()) * static_cast<std::uint64_t>(camera.height())) {}
+      pixel_count_(static_cast<std::uint64_t>(camera.width()) * static_cast<std::uint64_t>(camera.height())),
+      paths_(paths) {}
 
 void LightTracer::trace(std::uint64_t begin, std::uint64_t end, std::vector<Splat>& out, TraceCounters& counters,
                         std::uint64_t& nonfinite) const {
@@ -57,7 +58,7 @@ void LightTracer::trace_path(std::uint64_t index, std::vector<Splat>& out, Trace
     if (bsdf.is_black()) return;
     if (!bsdf.is_delta()) {
       // The first hit must be specular: L D ... paths belong to the path tracer's light sampling.
-      if (depth == 1) return;
+      if (depth == 1 && paths_ == LightPathSet::Caustics) return;
       PinholeCamera::Projection pr;
       if (camera_.project(sp.p, pr)) {
         // eval(wo, wi) is f |cos(ng, wi)|: with wi toward the camera it is the cosine of the connection.

@@ -46,6 +46,13 @@ struct Splat {
   glm::vec3 value{0.0f};
 };
 
+// Which light paths connect to the camera.
+//   Caustics   the renderer's: only after a specular first hit (the partition above);
+//   AllDiffuse every non-delta vertex, first hit included: light tracing then counts every path with a
+//              non-delta x1, which the path tracer counts too. Not a rendering mode: tests check the light
+//              tracer's normalisation with it against the path tracer's direct lighting (max_depth 2).
+enum class LightPathSet { Caustics, AllDiffuse };
+
 class LightTracer {
  public:
   // Salt mixed into the render seed for light paths, so that light path i and camera sample i (same pixel
@@ -54,7 +61,7 @@ class LightTracer {
 
   // `ctx.lights` must have surface lights; ctx and camera must outlive the tracer.
   LightTracer(const SceneContext& ctx, const IntegratorSettings& settings, const PinholeCamera& camera,
-              SamplerKind sampler, std::uint64_t seed);
+              SamplerKind sampler, std::uint64_t seed, LightPathSet paths = LightPathSet::Caustics);
 
   // Traces light paths [begin, end) (global indices), appending their splats to `out` in path order.
   // Non-finite contributions are dropped and counted in `nonfinite`.
@@ -71,6 +78,7 @@ class LightTracer {
   SamplerKind sampler_;
   std::uint64_t seed_;
   std::uint64_t pixel_count_;
+  LightPathSet paths_;
 };
 
 }  // namespace twinray
