@@ -239,10 +239,23 @@ TEST(CausticLightTracer, ImageIsBitIdenticalAcrossBackendsAndThreadCounts) {
     EXPECT_EQ(r.mean.data, reference.mean.data) << name;
     EXPECT_EQ(r.variance_of_mean.data, reference.variance_of_mean.data) << name;
   }
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-  const Rendered one_thread = render_scene(scene, o, "bvh8");
-  EXPECT_EQ(one_thread.mean.data, reference.mean.data);
-  EXPECT_EQ(one_thread.variance_of_mean.data, reference.variance_of_mean.data);
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    const Rendered one_thread = render_scene(scene, o, "bvh8");
+    EXPECT_EQ(one_thread.mean.data, reference.mean.data);
+    EXPECT_EQ(one_thread.variance_of_mean.data, reference.variance_of_mean.data);
+  }
+
+  // --time renders passes of 1 spp (light paths s P .. (s + 1) P - 1 in pass s): the same image as --spp
+  // with the number of passes it managed.
+  RenderOptions timed = o;
+  timed.time_budget_seconds = 0.05;
+  const Rendered progressive = render_scene(scene, timed, "bvh8");
+  ASSERT_GE(progressive.stats.spp, 1);
+  o.spp = progressive.stats.spp;
+  const Rendered at_once = render_scene(scene, o, "bvh8");
+  EXPECT_EQ(progressive.stats.light_paths, at_once.stats.light_paths);
+  EXPECT_EQ(progressive.mean.data, at_once.mean.data);
 }
 
 }  // namespace

@@ -227,8 +227,14 @@ struct LightChunk {
   std::uint64_t nonfinite = 0;
 };
 
+std::uint64_t light_rounds(std::uint64_t paths) {
+  const std::uint64_t per_round = kLightChunk * kRoundChunks;
+  return (paths + per_round - 1) / per_round;
+}
+
+// `progress`, when given, advances by one per round.
 void trace_light_paths(const LightTracer& tracer, std::uint64_t begin, std::uint64_t end, bool collect_query_stats,
-                       std::vector<LightChunk>& chunks, Film& film, RenderStats& stats) {
+                       std::vector<LightChunk>& chunks, Film& film, RenderStats& stats, Progress* progress) {
   chunks.resize(kRoundChunks);
   for (std::uint64_t round = begin; round < end; round += kLightChunk * kRoundChunks) {
     const std::uint64_t round_end = std::min(end, round + kLightChunk * kRoundChunks);
@@ -255,6 +261,7 @@ void trace_light_paths(const LightTracer& tracer, std::uint64_t begin, std::uint
       stats.query += chunk.counters.query;
     }
     stats.light_paths += round_end - round;
+    if (progress) progress->advance();
   }
 }
 
@@ -303,7 +310,8 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
     // One light path per camera sample: light path i belongs to sample i / P (P pixels), whichever pass.
     if (light_tracer)
       trace_light_paths(*light_tracer, static_cast<std::uint64_t>(sample_begin) * pixel_count,
-                        static_cast<std::uint64_t>(sample_end) * pixel_count, aux.cost, light_chunks, result.film, stats);
+                        static_cast<std::uint64_t>(sample_end) * pixel_count, aux.cost, light_chunks, result.film, stats,
+                        progress);
   };
 
   const auto start = std::chrono::steady_clock::now();
@@ -328,7 +336,10 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
     stats.spp = pass;
   } else {
     std::optional<Progress> progress;
-    if (opt.show_progress) progress.emplace("render", tiles.size());
+    // Tiles, then the light paths' rounds (caustics), which run after the tiles of the pass.
+    const std::uint64_t rounds =
+        light_tracer ? light_rounds(static_cast<std::uint64_t>(std::max(0, opt.spp)) * pixel_count) : 0;
+    if (opt.show_progress) progress.emplace("render", tiles.size() + rounds);
     run_pass(0, std::max(0, opt.spp), progress ? &*progress : nullptr);
     stats.spp = std::max(0, opt.spp);
   }
