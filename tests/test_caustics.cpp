@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <numbers>
 
 namespace twinray {
 namespace {
@@ -102,6 +103,51 @@ TEST(CausticLightTracer, CausticsModeOnlyConnectsAfterASpecularFirstHit) {
   tracer.trace(0, 4096, splats, counters, nonfinite);
   EXPECT_TRUE(splats.empty());
   EXPECT_EQ(counters.shadow_rays, 0u);
+}
+
+TEST(CausticLightTracer, EmissionSamplesCarryTheLightsPowerAndLeaveTheirFront) {
+  // Two quads of different radiance, an emissive sphere and a constant environment: light paths start only
+  // on the surfaces, and the mean weight of a start is the emitted power pi sum(A Le) exactly (the weight
+  // depends only on which light was picked: pi Le A / pmf). Directions are cosine-distributed about the
+  // emitting side: E[cos] = 2/3.
+  Scene scene;
+  add_quad(scene, {0, 2, 0}, {1, 0, 0}, {0, 0, 1}, add_material(scene, emissive({2, 2, 2})));   // faces down, A = 1
+  add_quad(scene, {3, 0, 0}, {0, 0, 2}, {0, 1, 0}, add_material(scene, emissive({1, 0.5f, 0.25f})));  // A = 2
+  add_sphere(scene, {-3, 1, 0}, 0.5f, add_material(scene, emissive({4, 4, 4})));
+  Environment env;
+  env.type = EnvironmentType::Constant;
+  env.radiance = glm::vec3(1.0f);
+  const auto sky = EnvironmentLight::create(env);
+  const LightSampler lights(scene, sky.get());
+  ASSERT_TRUE(lights.has_environment());
+  ASSERT_TRUE(lights.has_surface_lights());
+  const double pi = std::numbers::pi;
+  const glm::dvec3 power =
+      pi * (1.0 * glm::dvec3(2, 2, 2) + 2.0 * glm::dvec3(1, 0.5, 0.25) + 4.0 * pi * 0.25 * glm::dvec3(4, 4, 4));
+  Rng rng(8, 8);
+  constexpr int n = 200000;
+  glm::dvec3 sum(0.0), sum_sq(0.0);
+  double cos_sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    EmissionSample es;
+    ASSERT_TRUE(lights.sample_emission({rng.next_float(), rng.next_float()}, {rng.next_float(), rng.next_float()}, es));
+    sum += glm::dvec3(es.weight);
+    sum_sq += glm::dvec3(es.weight) * glm::dvec3(es.weight);
+    const float c = glm::dot(es.dir, es.normal);
+    ASSERT_GT(c, 0.0f);
+    cos_sum += c;
+    if (es.point.x >= 0.0f && es.point.x <= 1.0f) {  // the downward quad (the others lie at x = 3 and x < -2)
+      EXPECT_NEAR(es.point.y, 2.0f, 1e-6f);
+      EXPECT_EQ(es.normal, glm::vec3(0, -1, 0));
+    }
+  }
+  // The weight takes one of three values (one per light); 4 standard errors of its mean bound the error.
+  const glm::dvec3 mean = sum / static_cast<double>(n);
+  for (int c = 0; c < 3; ++c) {
+    const double se = std::sqrt((sum_sq[c] / n - mean[c] * mean[c]) / (n - 1));
+    EXPECT_NEAR(mean[c], power[c], 4.0 * se) << "channel " << c;
+  }
+  EXPECT_NEAR(cos_sum / n, 2.0 / 3.0, 4.0 * std::sqrt(1.0 / 18.0 / n));
 }
 
 Scene mirror_glass_box(int size) {
