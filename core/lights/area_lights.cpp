@@ -106,21 +106,23 @@ std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, glm::vec2 
   return s;
 }
 
-bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
-  if (!selection_) return false;
-  if (cdf_.empty()) {
-    float rest = 0.0f;
-    float pmf = 0.0f;
-    const std::size_t i = selection_->sample_discrete(u.x, &pmf, &rest);
-    return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
-  }
+std::size_t LightSampler::select_light(float u, float& pmf, float& rest) const {
+  if (cdf_.empty()) return selection_->sample_discrete(u, &pmf, &rest);
   // Empty bins (zero power) have cdf[i] == cdf[i+1]: both steps are counted or neither, so they are
   // skipped; u < 1 = cdf[n] never counts the last step.
   const std::size_t n = pmf_.size();
   std::size_t i = 0;
-  for (std::size_t k = 1; k < n; ++k) i += u.x >= cdf_[k] ? 1 : 0;
-  const float rest = std::min((u.x - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f);
-  return sample_light(i, pmf_[i], ref, glm::vec2(std::max(rest, 0.0f), u.y), s);
+  for (std::size_t k = 1; k < n; ++k) i += u >= cdf_[k] ? 1 : 0;
+  pmf = pmf_[i];
+  rest = std::max(std::min((u - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f), 0.0f);
+  return i;
+}
+
+bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
+  if (!selection_) return false;
+  float pmf = 0.0f, rest = 0.0f;
+  const std::size_t i = select_light(u.x, pmf, rest);
+  return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
 }
 
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_select, glm::vec2 u) const {
@@ -236,7 +238,7 @@ bool LightSampler::sample_emission(glm::vec2 u_point, glm::vec2 u_dir, EmissionS
   // them with probability pmf / surface fraction. The clamp keeps u below the environment's step.
   const float u_select = std::min(u_point.x * surface_fraction_, std::nextafter(surface_fraction_, 0.0f));
   float pmf = 0.0f, rest = 0.0f;
-  const std::size_t i = selection_->sample_discrete(std::max(u_select, 0.0f), &pmf, &rest);
+  const std::size_t i = select_light(std::max(u_select, 0.0f), pmf, rest);
   if (i >= triangles_.size() + spheres_.size() || !(pmf > 0.0f)) return false;
   const float pmf_surface = pmf / surface_fraction_;
   const glm::vec2 u(std::min(std::max(rest, 0.0f), 0x1.fffffep-1f), u_point.y);

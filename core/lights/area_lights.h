@@ -118,6 +118,9 @@ class LightSampler {
  private:
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+  // The light u picks (as sample(ref, u) picks it), its probability, and u rescaled to [0, 1) within the
+  // light's share.
+  std::size_t select_light(float u, float& pmf, float& rest) const;
   bool sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u, LightSample& s) const;
   static void sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u, LightSample& s);
   static void sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u, LightSample& s);

@@ -53,12 +53,13 @@ void LightTracer::trace_path(std::uint64_t index, std::vector<Splat>& out, Trace
     Hit hit;
     ctx_.backend->intersect(ray, hit, counters.query_stats());
     if (!hit.found()) return;
-    const SurfacePoint sp = make_surface_point(ctx_, ray, hit);
-    const Bsdf& bsdf = sp.bsdf();
+    // Decided from the material before the surface point is computed: most light paths end here.
+    const Bsdf& bsdf = ctx_.geoms[hit.geom_id].bsdf;
     if (bsdf.is_black()) return;
+    // The first hit must be specular: L D ... paths belong to the path tracer's light sampling.
+    if (depth == 1 && !bsdf.is_delta() && paths_ == LightPathSet::Caustics) return;
+    const SurfacePoint sp = make_surface_point(ctx_, ray, hit);
     if (!bsdf.is_delta()) {
-      // The first hit must be specular: L D ... paths belong to the path tracer's light sampling.
-      if (depth == 1 && paths_ == LightPathSet::Caustics) return;
       PinholeCamera::Projection pr;
       if (camera_.project(sp.p, pr)) {
         // eval(wo, wi) is f |cos(ng, wi)|: with wi toward the camera it is the cosine of the connection.
