@@ -28,6 +28,7 @@ struct CompareCommandOptions {
   std::optional<std::uint64_t> seed;
   int threads = 0;
   std::optional<int> rr_depth;
+  std::string caustics = "auto";
   std::string variant = "auto";
   std::string reference;
   std::string out;
@@ -53,6 +54,8 @@ int run_compare_command(const CompareCommandOptions& opt) {
   } catch (const std::invalid_argument& e) {
     return report_bad_input("compare", e.what());
   }
+  const std::optional<CausticsMode> caustics = parse_caustics_mode(opt.caustics);
+  if (!caustics) return report_bad_input("compare", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
   std::string why;
   if (!compare::probe_mitsuba(&why)) return report_bad_input("compare", why);
 
@@ -67,6 +70,7 @@ int run_compare_command(const CompareCommandOptions& opt) {
   s.seed = opt.seed.value_or(scene.render.seed);
   s.threads = opt.threads;
   s.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
+  s.caustics = *caustics;
   s.mitsuba_variant = opt.variant;
   s.reference = opt.reference;
   s.out = opt.out.empty() ? std::filesystem::path("compare-" + std::filesystem::path(opt.scene).stem().string())
@@ -122,6 +126,8 @@ void add_compare_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--seed", opt->seed, "Seed (default: the scene's render.seed)");
   cmd->add_option("--threads", opt->threads, "Worker threads of both renderers (0 = all cores)")->capture_default_str();
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette depth of both renderers (default: the scene's)");
+  cmd->add_option("--caustics", opt->caustics, "twinray's caustic light tracing: auto or off (docs/rendering.md)")
+      ->capture_default_str();
   cmd->add_option("--variant", opt->variant, "Mitsuba variant: auto (llvm_ad_rgb, else scalar_rgb), llvm_ad_rgb, scalar_rgb")->capture_default_str();
   cmd->add_option("--reference", opt->reference, "Reference image: relMSE of both renders against it");
   cmd->add_option("--out", opt->out, "Output folder (default compare-SCENE-STEM)");

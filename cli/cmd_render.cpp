@@ -30,6 +30,7 @@ struct RenderCommandOptions {
   std::string strategy = "mis";
   std::string env_sampling = "importance";
   std::string sampler = "sobol";
+  std::string caustics = "auto";
   std::optional<int> spp;
   std::optional<double> time_seconds;
   std::optional<int> max_depth;
@@ -89,6 +90,8 @@ int run_render(const RenderCommandOptions& opt) {
   else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
   if (const std::optional<SamplerKind> k = parse_sampler_kind(opt.sampler)) ro.sampler = *k;
   else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol, independent)");
+  if (const std::optional<CausticsMode> m = parse_caustics_mode(opt.caustics)) ro.caustics = *m;
+  else return report_bad_input("render", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
   if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
   if (opt.spp && *opt.spp < 1) return report_bad_input("render", "--spp must be at least 1");
   if (opt.time_seconds && !(*opt.time_seconds > 0.0)) return report_bad_input("render", "--time must be positive");
@@ -195,6 +198,9 @@ int run_render(const RenderCommandOptions& opt) {
              st.shadow_rays);
   fmt::print("NaN/Inf      {} samples (replaced by 0), {} negative (clamped to 0)\n", st.nonfinite_samples,
              st.negative_samples);
+  if (features.caustic_light_tracing)
+    fmt::print("caustics     {} light paths, {} camera connections splatted, {} NaN/Inf dropped\n", st.light_paths,
+               st.splats, st.nonfinite_splats);
   fmt::print("mean         ({:.5f}, {:.5f}, {:.5f})\n", mean.x, mean.y, mean.z);
   if (features.traversal_cost && st.rays() > 0)
     fmt::print("traversal    {:.2f} nodes, {:.2f} primitives per ray\n",
@@ -231,6 +237,11 @@ int run_render(const RenderCommandOptions& opt) {
         {"rays_per_second", st.rays_per_second()},
         {"nonfinite_samples", st.nonfinite_samples},
         {"negative_samples", st.negative_samples},
+        {"caustics", std::string(to_string(ro.caustics))},
+        {"caustic_light_tracing", features.caustic_light_tracing},
+        {"light_paths", st.light_paths},
+        {"splats", st.splats},
+        {"nonfinite_splats", st.nonfinite_splats},
         {"mean", {mean.x, mean.y, mean.z}},
         {"features", j_features},
         {"features_used", features.used()},
@@ -259,6 +270,10 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--strategy", opt->strategy, "mis (default), bsdf (BSDF sampling only), light (light sampling only)")
       ->capture_default_str();
   cmd->add_option("--env-sampling", opt->env_sampling, "Environment map sampling: importance or uniform")
+      ->capture_default_str();
+  cmd->add_option("--caustics", opt->caustics,
+                  "auto: light-trace caustics seen on diffuse surfaces when the scene has mirror or glass and an "
+                  "area light; off: path tracing alone (docs/rendering.md)")
       ->capture_default_str();
   cmd->add_option("--spp", opt->spp, "Samples per pixel (default: the scene's render.spp)");
   cmd->add_option("--time", opt->time_seconds, "Render passes of 1 spp until SECONDS have passed (instead of --spp)");

@@ -40,6 +40,29 @@ TEST(CliContract, InfoReportsFeaturesLeftOut) {
   EXPECT_NE(r.output.find("left out"), std::string::npos);
 }
 
+TEST(CliContract, RenderCausticsFlagAndJsonKeys) {
+  const auto dir = scratch_dir("render-caustics");
+  const std::string scene = quoted(source_path("scenes/cornell-mirror-glass.json"));
+  for (const char* mode : {"auto", "off"}) {
+    const auto json = dir / (std::string(mode) + ".json");
+    const CommandResult r = run_twinray("render " + scene + " --spp 1 --caustics " + mode + " -o " +
+                                        quoted(dir / (std::string(mode) + ".exr")) + " --json " + quoted(json));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = read_json(json);
+    const bool on = std::string(mode) == "auto";
+    EXPECT_EQ(j.at("caustics"), mode);
+    EXPECT_EQ(j.at("caustic_light_tracing").get<bool>(), on);
+    EXPECT_EQ(j.at("light_paths").get<std::uint64_t>(), on ? 256u * 256u : 0u);  // one per camera sample
+    EXPECT_EQ(j.at("splats").get<std::uint64_t>() > 0, on);
+    EXPECT_EQ(j.at("nonfinite_splats").get<std::uint64_t>(), 0u);
+    EXPECT_EQ(r.output.find("caustics     ") != std::string::npos, on) << r.output;
+  }
+  const CommandResult bad = run_twinray("render " + scene + " --spp 1 --caustics maybe -o " + quoted(dir / "bad.exr"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("--caustics"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
+}
+
 TEST(CliContract, InfoBuildsBackendsOnlyForGeometryPresent) {
   const auto dir = scratch_dir("info-build");
   const CommandResult r = run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) +

@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace twinray {
@@ -74,6 +75,10 @@ LightSampler::LightSampler(const Scene& scene, const EnvironmentLight* env) {
     const std::size_t n = selection_->size();
     pmf_.resize(n);
     for (std::size_t i = 0; i < n; ++i) pmf_[i] = selection_->pmf(i);
+    double surface = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      if (i != env_index_) surface += static_cast<double>(pmf_[i]);
+    surface_fraction_ = static_cast<float>(surface);
     if (n <= kFewLights) {
       cdf_.assign(n + 1, 0.0f);
       double running = 0.0;
@@ -101,21 +106,23 @@ std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, glm::vec2 
   return s;
 }
 
-bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
-  if (!selection_) return false;
-  if (cdf_.empty()) {
-    float rest = 0.0f;
-    float pmf = 0.0f;
-    const std::size_t i = selection_->sample_discrete(u.x, &pmf, &rest);
-    return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
-  }
+std::size_t LightSampler::select_light(float u, float& pmf, float& rest) const {
+  if (cdf_.empty()) return selection_->sample_discrete(u, &pmf, &rest);
   // Empty bins (zero power) have cdf[i] == cdf[i+1]: both steps are counted or neither, so they are
   // skipped; u < 1 = cdf[n] never counts the last step.
   const std::size_t n = pmf_.size();
   std::size_t i = 0;
-  for (std::size_t k = 1; k < n; ++k) i += u.x >= cdf_[k] ? 1 : 0;
-  const float rest = std::min((u.x - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f);
-  return sample_light(i, pmf_[i], ref, glm::vec2(std::max(rest, 0.0f), u.y), s);
+  for (std::size_t k = 1; k < n; ++k) i += u >= cdf_[k] ? 1 : 0;
+  pmf = pmf_[i];
+  rest = std::max(std::min((u - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f), 0.0f);
+  return i;
+}
+
+bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
+  if (!selection_) return false;
+  float pmf = 0.0f, rest = 0.0f;
+  const std::size_t i = select_light(u.x, pmf, rest);
+  return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
 }
 
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_select, glm::vec2 u) const {
@@ -223,6 +230,45 @@ float LightSampler::pdf_surface(const glm::vec3& ref, const Hit& hit, const glm:
 float LightSampler::pdf_environment(const glm::vec3& dir) const {
   if (!selection_ || env_ == nullptr || env_index_ == kNone) return 0.0f;
   return pmf_[env_index_] * env_->pdf(dir);
+}
+
+bool LightSampler::sample_emission(glm::vec2 u_point, glm::vec2 u_dir, EmissionSample& out) const {
+  if (!has_surface_lights()) return false;
+  // The surface lights come first in selection order, so scaling u into [0, surface fraction) picks among
+  // them with probability pmf / surface fraction. The clamp keeps u below the environment's step.
+  const float u_select = std::min(u_point.x * surface_fraction_, std::nextafter(surface_fraction_, 0.0f));
+  float pmf = 0.0f, rest = 0.0f;
+  const std::size_t i = select_light(std::max(u_select, 0.0f), pmf, rest);
+  if (i >= triangles_.size() + spheres_.size() || !(pmf > 0.0f)) return false;
+  const float pmf_surface = pmf / surface_fraction_;
+  const glm::vec2 u(std::min(std::max(rest, 0.0f), 0x1.fffffep-1f), u_point.y);
+  float area = 0.0f;
+  glm::vec3 radiance(0.0f);
+  if (i < triangles_.size()) {
+    const EmissiveTriangle& tri = triangles_[i];
+    const glm::vec3 b = sample_uniform_triangle(u);
+    out.point = tri.p0 + b.y * tri.e1 + b.z * tri.e2;
+    out.normal = tri.normal;
+    const glm::vec3 p1 = tri.p0 + tri.e1, p2 = tri.p0 + tri.e2;
+    const glm::vec3 m = glm::max(glm::abs(tri.p0), glm::max(glm::abs(p1), glm::abs(p2)));
+    out.error_scale = std::max(m.x, std::max(m.y, m.z));
+    area = tri.area;
+    radiance = tri.radiance;
+  } else {
+    const EmissiveSphere& sph = spheres_[i - triangles_.size()];
+    out.normal = sample_uniform_sphere(u);
+    out.point = sph.center + sph.radius * out.normal;
+    const glm::vec3 c = glm::abs(sph.center);
+    out.error_scale = std::max(c.x, std::max(c.y, c.z)) + sph.radius;
+    area = 4.0f * kPi * sph.radius * sph.radius;
+    radiance = sph.radiance;
+  }
+  if (!(area > 0.0f)) return false;
+  out.dir = glm::normalize(Frame::from_normal(out.normal).to_world(sample_cosine_hemisphere(u_dir)));
+  if (!(glm::dot(out.dir, out.normal) > 0.0f)) return false;
+  // Le cos / (pdf_area cos / pi) with pdf_area = pmf_surface / area.
+  out.weight = radiance * (kPi * area / pmf_surface);
+  return std::isfinite(out.weight.x) && std::isfinite(out.weight.y) && std::isfinite(out.weight.z);
 }
 
 }  // namespace twinray

@@ -65,6 +65,16 @@ struct LightSample {
   bool is_environment = false;
 };
 
+// A point on a surface light and a direction leaving its emitting side: the start of a light path
+// (LightSampler::sample_emission).
+struct EmissionSample {
+  glm::vec3 point{0.0f};
+  glm::vec3 normal{0.0f};    // unit, the emitting side
+  glm::vec3 dir{0.0f};       // unit, cosine-distributed about `normal`
+  glm::vec3 weight{0.0f};    // Le |cos| / (pdf_area pdf_dir) = pi Le / pdf_area, light selection included
+  float error_scale = 0.0f;  // magnitude of the coordinates the point's error comes from (ray_offset.h)
+};
+
 class LightSampler {
  public:
   // `env` may be null; it must outlive the sampler. Lights with zero radiance are ignored.
@@ -86,6 +96,14 @@ class LightSampler {
   // cannot contribute (pdf 0 or not finite), `out` then unspecified.
   bool sample(const glm::vec3& ref, glm::vec2 u, LightSample& out) const;
 
+  // Whether any surface (triangle or sphere) light exists: only those start light paths.
+  bool has_surface_lights() const { return selection_.has_value() && surface_fraction_ > 0.0f; }
+  // The start of a light path: a surface light chosen in proportion to its power as sample() chooses
+  // (u_point.x, renormalised over the surface lights: the environment never starts a light path), a point
+  // uniform in its area (u_point), and a cosine-weighted direction on its emitting side (u_dir). False when
+  // nothing can be emitted (no surface light, a zero-area pick).
+  bool sample_emission(glm::vec2 u_point, glm::vec2 u_dir, EmissionSample& out) const;
+
   // Density with which sample(ref, ...) would produce the direction toward `point` on surface light hit
   // `hit` (geometry and primitive ids); 0 when that primitive is not a sampled light.
   float pdf_surface(const glm::vec3& ref, const Hit& hit, const glm::vec3& point) const;
@@ -100,6 +118,9 @@ class LightSampler {
  private:
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
+  // The light u picks (as sample(ref, u) picks it), its probability, and u rescaled to [0, 1) within the
+  // light's share.
+  std::size_t select_light(float u, float& pmf, float& rest) const;
   bool sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u, LightSample& s) const;
   static void sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u, LightSample& s);
   static void sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u, LightSample& s);
@@ -120,6 +141,7 @@ class LightSampler {
   std::vector<float> cdf_;        // size n + 1, only when n <= kFewLights
   std::vector<float> inv_width_;  // 1 / (cdf[i+1] - cdf[i]), 0 for empty bins; only when n <= kFewLights
   std::vector<float> pmf_;        // size n
+  float surface_fraction_ = 0.0f; // probability that sample() picks a surface light (1 without environment)
 };
 
 }  // namespace twinray

@@ -1,5 +1,6 @@
 #include "core/render/film.h"
 
+#include <algorithm>
 #include <limits>
 
 namespace twinray {
@@ -15,6 +16,8 @@ Film::Film(int width, int height, const AuxChannels& aux) : width_(width), heigh
     depth_hits_.assign(n, 0);
   }
 }
+
+void Film::enable_splats() { splats_.assign(pixels_.size(), SplatSums{}); }
 
 namespace {
 
@@ -32,24 +35,37 @@ Image rgb_image_from(int w, int h, const std::vector<glm::dvec3>& sums, const st
 
 Image Film::mean_image() const {
   Image img(width_, height_, 3);
+  const bool splats = has_splats() && splat_spp_ > 0;
+  const double spp = static_cast<double>(splat_spp_);
   for (std::size_t i = 0; i < pixels_.size(); ++i) {
     const double n = static_cast<double>(pixels_[i].samples);
-    if (n == 0.0) continue;
-    for (int c = 0; c < 3; ++c)
-      img.data[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(pixels_[i].sum[c] / n);
+    for (int c = 0; c < 3; ++c) {
+      double v = n > 0.0 ? pixels_[i].sum[c] / n : 0.0;
+      if (splats) v += splats_[i].sum[c] / spp;
+      img.data[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(v);
+    }
   }
   return img;
 }
 
 Image Film::variance_of_mean_image() const {
   Image img(width_, height_, 3);
+  const bool splats = has_splats() && splat_spp_ > 0;
+  const double spp = static_cast<double>(splat_spp_);
+  const double paths = spp * static_cast<double>(pixels_.size());
   for (std::size_t i = 0; i < pixels_.size(); ++i) {
     const double n = static_cast<double>(pixels_[i].samples);
-    if (n < 2.0) continue;
     for (int c = 0; c < 3; ++c) {
-      const double mean = pixels_[i].sum[c] / n;
-      const double var = std::max(0.0, (pixels_[i].sum_sq[c] - n * mean * mean) / (n - 1.0));
-      img.data[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(var / n);
+      double var = 0.0;
+      if (n >= 2.0) {
+        const double mean = pixels_[i].sum[c] / n;
+        var = std::max(0.0, (pixels_[i].sum_sq[c] - n * mean * mean) / (n - 1.0)) / n;
+      }
+      if (splats) {
+        const double sum = splats_[i].sum[c];
+        var += std::max(0.0, splats_[i].sum_sq[c] - sum * sum / paths) / (spp * spp);
+      }
+      img.data[3 * i + static_cast<std::size_t>(c)] = static_cast<float>(var);
     }
   }
   return img;

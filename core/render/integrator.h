@@ -40,6 +40,9 @@ struct IntegratorSettings {
   int max_depth = -1;  // see the depth convention above
   int rr_depth = 5;    // Russian roulette from this many segments on (Mitsuba's rr_depth)
   SamplingStrategy strategy = SamplingStrategy::Mis;
+  // The light tracer (core/render/light_tracer.h) counts the caustic paths E x1 ... S+ L (x1 non-delta,
+  // the vertices after the last non-delta one all delta): the path tracer then leaves them out.
+  bool light_traced_caustics = false;
 };
 
 // What a hit needs to know about the surface of one geometry id, gathered once per render so that shading

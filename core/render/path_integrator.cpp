@@ -19,6 +19,9 @@ struct PathState {
   glm::vec3 prev_p{0.0f};      // the vertex the current ray left
   float prev_bsdf_pdf = 0.0f;  // the density the current ray's direction was sampled with
   bool prev_delta = true;      // the camera ray is a "delta" start: emission seen directly counts fully
+  // The light tracer counts this path's emission when the last vertex was delta (light_tracer.h): set at a
+  // non-delta first vertex when light_traced_caustics is on.
+  bool caustic_by_light_tracer = false;
 };
 
 // Paths still going, compacted after every segment: rays[a] and hits[a] belong to path active[a]. Vertices
@@ -97,7 +100,8 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       }
       const SurfacePoint sp = make_surface_point(ctx_, rays[a], hit);
       if (depth == 1 && !first.empty()) record_first_hit(&first[i], sp, hit.t);
-      if (sp.geom->emissive)
+      // Emission after a delta vertex behind a non-delta first vertex belongs to the light tracer.
+      if (sp.geom->emissive && !(st.caustic_by_light_tracer && st.prev_delta))
         out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p);
       if (last_segment || sp.bsdf().is_black()) continue;
       vertex[n_vertices] = sp;
@@ -133,6 +137,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       const SurfacePoint& sp = vertex[v];
       const std::uint16_t i = vertex_path[v];
       PathState& st = state[i];
+      if (depth == 1) st.caustic_by_light_tracer = settings_.light_traced_caustics && !sp.bsdf().is_delta();
       BsdfSample bs;
       if (!sp.bsdf().sample(sp.wo, sp.ng, u_bsdf[v], bs) || max_component(bs.weight) <= 0.0f) continue;
       st.throughput *= bs.weight;

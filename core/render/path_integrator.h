@@ -5,7 +5,9 @@
 // taken; emission reached by the continuation is weighted against the light sample by the power heuristic
 // (SamplingStrategy::Mis). Delta vertices (mirror, glass) take no light sample, and emission seen after
 // them counts fully. Paths end at max_depth segments, when the BSDF absorbs, or by Russian roulette from
-// rr_depth segments on (core/render/russian_roulette.h).
+// rr_depth segments on (core/render/russian_roulette.h). With light_traced_caustics, emission reached right
+// after a delta vertex by a path whose first vertex is non-delta is left to the light tracer
+// (core/render/light_tracer.h), which counts those caustic paths instead.
 //
 // Wavefront: the paths of a batch (one sample of each pixel of a tile) advance together, one segment at a
 // time: all their rays are traced, then every path is shaded (emission, light sample, BSDF sample,

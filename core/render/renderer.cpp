@@ -2,6 +2,7 @@
 
 #include "core/camera/pinhole_camera.h"
 #include "core/render/direct_integrator.h"
+#include "core/render/light_tracer.h"
 #include "core/render/path_integrator.h"
 #include "core/render/light_transport.h"
 #include "core/sampling/rng.h"
@@ -11,6 +12,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -27,6 +29,14 @@ std::string_view to_string(SamplingStrategy s) {
     case SamplingStrategy::Light: return "light";
   }
   return "mis";
+}
+
+std::string_view to_string(CausticsMode m) { return m == CausticsMode::Off ? "off" : "auto"; }
+
+std::optional<CausticsMode> parse_caustics_mode(std::string_view name) {
+  if (name == "auto") return CausticsMode::Auto;
+  if (name == "off") return CausticsMode::Off;
+  return std::nullopt;
 }
 
 std::vector<std::string> RenderFeatures::used() const {
@@ -82,6 +92,21 @@ RenderSetup::RenderSetup(const Scene& scene, const RenderOptions& options, const
   if (f.sphere_geometry) note("sphere light sampling", f.sphere_lights, "no emissive spheres");
   if (options.aux.cost)
     note("traversal cost", f.traversal_cost, "backend does not count traversal");
+
+  const bool has_delta_bsdf = std::any_of(scene.shapes.begin(), scene.shapes.end(), [&scene](const ShapeInfo& s) {
+    const MaterialType t = scene.materials[s.material].type;
+    return t == MaterialType::Mirror || t == MaterialType::Glass;
+  });
+  const bool surface_lights = lights_ && lights_->has_surface_lights();
+  f.caustic_light_tracing = options.caustics == CausticsMode::Auto && options.integrator == IntegratorKind::Path &&
+                            has_delta_bsdf && surface_lights;
+  std::string caustics_reason;
+  if (options.caustics == CausticsMode::Off) caustics_reason = "--caustics off";
+  else if (options.integrator != IntegratorKind::Path) caustics_reason = "direct integrator";
+  else if (!has_delta_bsdf) caustics_reason = "no mirror or glass";
+  else if (!wants_light_sampling) caustics_reason = "bsdf-only strategy";
+  else if (!surface_lights) caustics_reason = "no area lights";
+  note("caustic light tracing", f.caustic_light_tracing, caustics_reason);
 }
 
 std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const SceneContext& ctx,
@@ -189,6 +214,57 @@ void render_tile(const Tile& tile, int sample_begin, int sample_end, const Pinho
   }
 }
 
+// Light paths go in chunks of kLightChunk, kRoundChunks chunks traced in parallel at a time; then the
+// round's splats are added to the film one chunk after the other, in chunk order, so the sums depend only
+// on the light paths' global indices. A round bounds the splat lists' memory (a chunk rarely holds more
+// splats than paths) and costs one join of the workers, small next to 2^17 light paths.
+constexpr std::uint64_t kLightChunk = 256;
+constexpr std::size_t kRoundChunks = 512;
+
+struct LightChunk {
+  std::vector<Splat> splats;
+  TraceCounters counters;
+  std::uint64_t nonfinite = 0;
+};
+
+std::uint64_t light_rounds(std::uint64_t paths) {
+  const std::uint64_t per_round = kLightChunk * kRoundChunks;
+  return (paths + per_round - 1) / per_round;
+}
+
+// `progress`, when given, advances by one per round.
+void trace_light_paths(const LightTracer& tracer, std::uint64_t begin, std::uint64_t end, bool collect_query_stats,
+                       std::vector<LightChunk>& chunks, Film& film, RenderStats& stats, Progress* progress) {
+  chunks.resize(kRoundChunks);
+  for (std::uint64_t round = begin; round < end; round += kLightChunk * kRoundChunks) {
+    const std::uint64_t round_end = std::min(end, round + kLightChunk * kRoundChunks);
+    const auto n_chunks = static_cast<std::size_t>((round_end - round + kLightChunk - 1) / kLightChunk);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      ScopedFlushDenormals ftz;
+      for (std::size_t c = r.begin(); c != r.end(); ++c) {
+        LightChunk& chunk = chunks[c];
+        chunk.splats.clear();
+        chunk.counters = TraceCounters{};
+        chunk.counters.collect_query_stats = collect_query_stats;
+        chunk.nonfinite = 0;
+        const std::uint64_t first = round + c * kLightChunk;
+        tracer.trace(first, std::min(round_end, first + kLightChunk), chunk.splats, chunk.counters, chunk.nonfinite);
+      }
+    });
+    for (std::size_t c = 0; c < n_chunks; ++c) {
+      const LightChunk& chunk = chunks[c];
+      for (const Splat& s : chunk.splats) film.add_splat(s.pixel, glm::dvec3(s.value));
+      stats.splats += chunk.splats.size();
+      stats.nonfinite_splats += chunk.nonfinite;
+      stats.closest_hit_rays += chunk.counters.closest_hit_rays;
+      stats.shadow_rays += chunk.counters.shadow_rays;
+      stats.query += chunk.counters.query;
+    }
+    stats.light_paths += round_end - round;
+    if (progress) progress->advance();
+  }
+}
+
 }  // namespace
 
 RenderResult render(const RenderSetup& setup, const Backend& backend) {
@@ -196,11 +272,18 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
   const Scene& scene = setup.scene();
   const PinholeCamera camera(scene.camera);
   const SceneContext ctx = SceneContext::make(scene, backend, setup.environment(), setup.lights());
-  const std::unique_ptr<Integrator> integrator = make_integrator(opt.integrator, ctx, opt.settings);
+  IntegratorSettings settings = opt.settings;
+  settings.light_traced_caustics = setup.features().caustic_light_tracing;
+  const std::unique_ptr<Integrator> integrator = make_integrator(opt.integrator, ctx, settings);
+  std::optional<LightTracer> light_tracer;
+  if (settings.light_traced_caustics) light_tracer.emplace(ctx, settings, camera, opt.sampler, opt.seed);
+  std::vector<LightChunk> light_chunks;
 
   AuxChannels aux = opt.aux;
   aux.cost = setup.features().traversal_cost;
   RenderResult result{Film(camera.width(), camera.height(), aux), RenderStats{}};
+  if (light_tracer) result.film.enable_splats();
+  const std::uint64_t pixel_count = static_cast<std::uint64_t>(camera.width()) * static_cast<std::uint64_t>(camera.height());
   const std::vector<Tile> tiles = make_tiles(camera.width(), camera.height(), std::max(1, opt.tile_size));
 
   std::mutex merge_mutex;
@@ -224,6 +307,11 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
         if (progress) progress->advance();
       }
     });
+    // One light path per camera sample: light path i belongs to sample i / P (P pixels), whichever pass.
+    if (light_tracer)
+      trace_light_paths(*light_tracer, static_cast<std::uint64_t>(sample_begin) * pixel_count,
+                        static_cast<std::uint64_t>(sample_end) * pixel_count, aux.cost, light_chunks, result.film, stats,
+                        progress);
   };
 
   const auto start = std::chrono::steady_clock::now();
@@ -248,11 +336,15 @@ RenderResult render(const RenderSetup& setup, const Backend& backend) {
     stats.spp = pass;
   } else {
     std::optional<Progress> progress;
-    if (opt.show_progress) progress.emplace("render", tiles.size());
+    // Tiles, then the light paths' rounds (caustics), which run after the tiles of the pass.
+    const std::uint64_t rounds =
+        light_tracer ? light_rounds(static_cast<std::uint64_t>(std::max(0, opt.spp)) * pixel_count) : 0;
+    if (opt.show_progress) progress.emplace("render", tiles.size() + rounds);
     run_pass(0, std::max(0, opt.spp), progress ? &*progress : nullptr);
     stats.spp = std::max(0, opt.spp);
   }
   stats.seconds = elapsed();
+  result.film.set_splat_samples_per_pixel(static_cast<std::uint64_t>(stats.spp));
   return result;
 }
 

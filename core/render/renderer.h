@@ -8,7 +8,9 @@
 //
 // Leaving out what a scene does not need: the setup builds environment sampling tables only for an
 // environment map, a light sampler only when something emits, and sphere light code only for emissive
-// spheres; RenderFeatures records what was built and why the rest was left out.
+// spheres; RenderFeatures records what was built and why the rest was left out. The caustic light tracer
+// (core/render/light_tracer.h) runs only for the path integrator on scenes with a delta BSDF (mirror,
+// glass) and a surface light, unless RenderOptions::caustics is Off.
 
 #include "core/backend/backend.h"
 #include "core/lights/area_lights.h"
@@ -21,9 +23,15 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace twinray {
+
+// Whether caustics seen directly on diffuse surfaces are light traced (core/render/light_tracer.h).
+enum class CausticsMode { Auto, Off };
+std::string_view to_string(CausticsMode m);
+std::optional<CausticsMode> parse_caustics_mode(std::string_view name);
 
 struct RenderOptions {
   IntegratorKind integrator = IntegratorKind::Path;
@@ -34,6 +42,7 @@ struct RenderOptions {
   std::uint64_t seed = 0;
   AuxChannels aux;
   SamplerKind sampler = SamplerKind::Sobol;  // core/sampling/sampler.h
+  CausticsMode caustics = CausticsMode::Auto;
   int tile_size = 16;
   bool show_progress = true;            // a progress line on a terminal (core/util/progress.h)
 };
@@ -51,6 +60,7 @@ struct RenderFeatures {
   bool sphere_lights = false;        // sphere light sampling code in use
   bool sphere_geometry = false;      // the scene has spheres at all
   bool traversal_cost = false;       // the cost AOV is recorded
+  bool caustic_light_tracing = false;  // light paths through specular chains are connected to the camera
   std::size_t triangle_light_count = 0;
   std::size_t sphere_light_count = 0;
   std::vector<FeatureNote> notes;    // human-readable, in summary order
@@ -84,10 +94,13 @@ struct RenderStats {
   double seconds = 0.0;
   int spp = 0;                          // samples per pixel actually rendered
   std::uint64_t samples = 0;            // camera samples
-  std::uint64_t closest_hit_rays = 0;   // camera and continuation rays
-  std::uint64_t shadow_rays = 0;
+  std::uint64_t closest_hit_rays = 0;   // camera, continuation and light-path rays
+  std::uint64_t shadow_rays = 0;       // light samples and camera connections
   std::uint64_t nonfinite_samples = 0;  // NaN/Inf radiance: replaced by 0, counted here
   std::uint64_t negative_samples = 0;   // a negative component: clamped to 0, counted here
+  std::uint64_t light_paths = 0;        // caustic light tracer: paths started (one per camera sample)
+  std::uint64_t splats = 0;             // and their connections to the camera that reached the film
+  std::uint64_t nonfinite_splats = 0;   // NaN/Inf connections: dropped, counted here
   QueryStats query;                     // traversal cost (only with the cost AOV)
 
   std::uint64_t rays() const { return closest_hit_rays + shadow_rays; }

@@ -43,6 +43,10 @@ std::vector<Feature> scene_features(const Scene& scene) {
                                         : Feature{"dielectric (glass) BSDF", false, "no glass"});
   f.push_back(uses(MaterialType::Mirror) ? Feature{"mirror BSDF", true, "mirror material in use"}
                                          : Feature{"mirror BSDF", false, "no mirror"});
+  const bool delta = uses(MaterialType::Glass) || uses(MaterialType::Mirror);
+  if (!delta) f.push_back({"caustic light tracing", false, "no mirror or glass"});
+  else if (!emitters) f.push_back({"caustic light tracing", false, "no area lights"});
+  else f.push_back({"caustic light tracing", true, "light paths through mirror/glass connected to the camera (render --caustics)"});
   return f;
 }
 

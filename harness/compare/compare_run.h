@@ -13,6 +13,7 @@
 
 #include "harness/compare/image_comparison.h"
 #include "harness/compare/mitsuba_peer.h"
+#include "core/render/renderer.h"
 #include "core/scene/scene.h"
 
 #include <nlohmann/json.hpp>
@@ -34,6 +35,7 @@ struct CompareSettings {
   std::uint64_t seed = 0;
   int threads = 0;                 // 0 = all cores
   int rr_depth = 5;
+  CausticsMode caustics = CausticsMode::Auto;  // twinray's caustic light tracer (core/render/renderer.h)
   std::string mitsuba_variant = "auto";
   std::filesystem::path reference; // optional: relMSE of both against it
   std::filesystem::path out;       // output folder
