@@ -14,6 +14,8 @@ namespace twinray {
 void validate(const WideCollapseOptions& o) {
   if (!(o.node_cost > 0.0f) || !(o.block_cost > 0.0f) || !std::isfinite(o.node_cost) || !std::isfinite(o.block_cost))
     throw std::invalid_argument("wide bvh: node_cost and block_cost must be positive and finite");
+  if (!(o.padding_cost >= 0.0f) || !std::isfinite(o.padding_cost))
+    throw std::invalid_argument("wide bvh: padding_cost must be non-negative and finite");
   if (o.max_leaf_size < 1 || o.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
     throw std::invalid_argument("wide bvh: max_leaf_size must be in 1..32, got " + std::to_string(o.max_leaf_size));
 }
@@ -42,6 +44,10 @@ class Collapser {
 
   WideTree run() {
     const std::size_t n = bin_.nodes.size();
+    if (n != 0 && !bin_.prim_order.empty()) {
+      const float root_area = Bounds3{bin_.nodes[0].lo, bin_.nodes[0].hi}.half_area();
+      lane_penalty_ = o_.padding_cost * o_.block_cost * root_area / static_cast<float>(bin_.prim_order.size());
+    }
     sub_.resize(n);
     plan_.resize(n);
     // Children come after their parent in the depth-first array: a reverse sweep sees them first.
@@ -122,7 +128,9 @@ class Collapser {
 
   float leaf_cost(const Subtree& s) const {
     const std::uint32_t tests = s.spheres ? s.count : (s.count + kTriangleBlockLanes - 1) / kTriangleBlockLanes;
-    return o_.block_cost * s.area * static_cast<float>(tests);
+    const float cost = o_.block_cost * s.area * static_cast<float>(tests);
+    if (s.spheres) return cost;
+    return cost + lane_penalty_ * static_cast<float>(tests * kTriangleBlockLanes - s.count);
   }
 
   float split_cost(std::uint32_t i, int j) const {
@@ -201,6 +209,7 @@ class Collapser {
   std::vector<Subtree> sub_;
   std::vector<Plan> plan_;
   WideTree* out_ = nullptr;
+  float lane_penalty_ = 0.0f;  // cost of one padded lane of a triangle block (padding_cost in area units)
 };
 
 }  // namespace

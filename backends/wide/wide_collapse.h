@@ -32,6 +32,9 @@ struct WideCollapseOptions {
   // same arbitrary unit; only the ratio matters. See docs/bvh-backend.md for the measurements.
   float node_cost = 1.0f;
   float block_cost = 1.0f;
+  // Cost of one padded (empty) lane of a leaf's last triangle block, in units of block_cost times the
+  // root's area over the primitive count: a memory price that only small leaves of dense regions notice.
+  float padding_cost = 0.0f;
   // Largest leaf the collapse may form by merging a binary subtree (1..32 primitives); binary leaves are
   // kept whatever their size.
   int max_leaf_size = 8;
