@@ -14,8 +14,8 @@ namespace twinray {
 void validate(const WideCollapseOptions& o) {
   if (!(o.node_cost > 0.0f) || !(o.block_cost > 0.0f) || !std::isfinite(o.node_cost) || !std::isfinite(o.block_cost))
     throw std::invalid_argument("wide bvh: node_cost and block_cost must be positive and finite");
-  if (!(o.padding_cost >= 0.0f) || !std::isfinite(o.padding_cost))
-    throw std::invalid_argument("wide bvh: padding_cost must be non-negative and finite");
+  if (!(o.padding_cost >= 0.0f) || !std::isfinite(o.padding_cost) || !(o.volume_cost >= 0.0f) || !std::isfinite(o.volume_cost))
+    throw std::invalid_argument("wide bvh: padding_cost and volume_cost must be non-negative and finite");
   if (o.max_leaf_size < 1 || o.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
     throw std::invalid_argument("wide bvh: max_leaf_size must be in 1..32, got " + std::to_string(o.max_leaf_size));
 }
@@ -47,6 +47,8 @@ class Collapser {
     if (n != 0 && !bin_.prim_order.empty()) {
       const float root_area = Bounds3{bin_.nodes[0].lo, bin_.nodes[0].hi}.half_area();
       lane_penalty_ = o_.padding_cost * o_.block_cost * root_area / static_cast<float>(bin_.prim_order.size());
+      const float root_volume = volume(bin_.nodes[0]);
+      if (root_volume > 0.0f) volume_weight_ = o_.volume_cost * root_area / root_volume;
     }
     sub_.resize(n);
     plan_.resize(n);
@@ -77,7 +79,7 @@ class Collapser {
     const BvhNode& node = bin_.nodes[i];
     Subtree& s = sub_[i];
     Plan& p = plan_[i];
-    s.area = Bounds3{node.lo, node.hi}.half_area();
+    s.area = Bounds3{node.lo, node.hi}.half_area() + volume_weight_ * volume(node);
     if (node.is_leaf()) {
       s.first = node.first_prim();
       s.count = node.prim_count();
@@ -124,6 +126,11 @@ class Collapser {
       }
     }
     p.k[1] = split_k[kW];  // reused: how a wide node at i splits its 8 slots between left and right
+  }
+
+  static float volume(const BvhNode& node) {
+    const glm::vec3 e = glm::max(node.hi - node.lo, glm::vec3(0.0f));
+    return e.x * e.y * e.z;
   }
 
   float leaf_cost(const Subtree& s) const {
@@ -209,7 +216,8 @@ class Collapser {
   std::vector<Subtree> sub_;
   std::vector<Plan> plan_;
   WideTree* out_ = nullptr;
-  float lane_penalty_ = 0.0f;  // cost of one padded lane of a triangle block (padding_cost in area units)
+  float lane_penalty_ = 0.0f;
+  float volume_weight_ = 0.0f;  // volume_cost in area units: A(root) / V(root) per unit of volume  // cost of one padded lane of a triangle block (padding_cost in area units)
 };
 
 }  // namespace
