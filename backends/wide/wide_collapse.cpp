@@ -47,8 +47,11 @@ class Collapser {
     if (n != 0 && !bin_.prim_order.empty()) {
       const float root_area = Bounds3{bin_.nodes[0].lo, bin_.nodes[0].hi}.half_area();
       lane_penalty_ = o_.padding_cost * o_.block_cost * root_area / static_cast<float>(bin_.prim_order.size());
-      const float root_volume = volume(bin_.nodes[0]);
-      if (root_volume > 0.0f) volume_weight_ = o_.volume_cost * root_area / root_volume;
+      // In double: a volume of float extents neither overflows nor underflows there. A flat scene has no
+      // volume to weigh; an infinite area (coordinates near float's range) leaves the area alone.
+      const double root_volume = volume(bin_.nodes[0]);
+      if (root_volume > 0.0) volume_weight_ = double(o_.volume_cost) * double(root_area) / root_volume;
+      if (!std::isfinite(volume_weight_)) volume_weight_ = 0.0;
     }
     sub_.resize(n);
     plan_.resize(n);
@@ -79,7 +82,8 @@ class Collapser {
     const BvhNode& node = bin_.nodes[i];
     Subtree& s = sub_[i];
     Plan& p = plan_[i];
-    s.area = Bounds3{node.lo, node.hi}.half_area() + volume_weight_ * volume(node);
+    // The weight a ray's chance of visiting the box is taken proportional to (wide_collapse.h).
+    s.area = Bounds3{node.lo, node.hi}.half_area() + static_cast<float>(volume_weight_ * volume(node));
     if (node.is_leaf()) {
       s.first = node.first_prim();
       s.count = node.prim_count();
@@ -128,9 +132,9 @@ class Collapser {
     p.k[1] = split_k[kW];  // reused: how a wide node at i splits its 8 slots between left and right
   }
 
-  static float volume(const BvhNode& node) {
+  static double volume(const BvhNode& node) {
     const glm::vec3 e = glm::max(node.hi - node.lo, glm::vec3(0.0f));
-    return e.x * e.y * e.z;
+    return double(e.x) * double(e.y) * double(e.z);
   }
 
   float leaf_cost(const Subtree& s) const {
@@ -192,7 +196,7 @@ class Collapser {
     const int k = plan_[i].k[1];
     distribute(i + 1, k, slots);
     distribute(bin_.nodes[i].second_child(), kW - k, slots);
-    // Larger area first: the any-hit visiting order (see wide_collapse.h).
+    // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
     std::stable_sort(slots.begin(), slots.end(), [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
 
     init_empty(out_->nodes[w]);
@@ -216,8 +220,8 @@ class Collapser {
   std::vector<Subtree> sub_;
   std::vector<Plan> plan_;
   WideTree* out_ = nullptr;
-  float lane_penalty_ = 0.0f;
-  float volume_weight_ = 0.0f;  // volume_cost in area units: A(root) / V(root) per unit of volume  // cost of one padded lane of a triangle block (padding_cost in area units)
+  float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
+  double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume
 };
 
 }  // namespace

@@ -21,9 +21,10 @@
 // it decides per subtree whether a level of boxes pays for itself and where whole subtrees are cheaper as
 // one leaf, which a greedy pass cannot see.
 //
-// Children are stored larger area first: any-hit traversal visits them in stored order, which tries the
-// child most likely to hold an occluder first (Nah and Manocha, "SATO: surface area traversal order for
-// shadow ray tracing", CGF 2014); closest-hit traversal sorts by entry distance instead.
+// Children are stored larger weight (area plus the volume term) first: any-hit traversal visits them in
+// stored order, which tries the child most likely to hold an occluder first (Nah and Manocha, "SATO:
+// surface area traversal order for shadow ray tracing", CGF 2014); closest-hit traversal sorts by entry
+// distance instead.
 
 #include "backends/bvh/bvh_builder.h"
 #include "backends/wide/wide_node.h"
