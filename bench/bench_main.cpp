@@ -11,7 +11,8 @@
 //   --twinray_brute_max_triangles=N  brute force only on scenes up to N triangles (default 1024)
 //   --twinray_meshes=0               leave out the shared meshes
 // The shared meshes are read from $TWINRAY_SHARED/data/meshes (scenes whose file is missing are left out),
-// and with them the interior views scenes/sponza-interior.json and scenes/dragon-closeup.json.
+// and with them the interior views scenes/sponza-interior.json, scenes/dragon-closeup.json and
+// scenes/cornell-box-reference.json.
 
 #include "bench/bench_registration.h"
 

@@ -82,8 +82,9 @@ std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::op
       else fmt::print(stderr, "twinray_bench: {} not found, scene '{}' left out\n", path.string(), name);
     }
     // Interior views of the same meshes: scene files with their own camera and lights, which read the
-    // meshes through $TWINRAY_SHARED.
-    for (const char* name : {"sponza-interior", "dragon-closeup"}) {
+    // meshes through $TWINRAY_SHARED; and the closed Cornell box (36 triangles, every ray starts inside
+    // the boxes of the leaves around it), where the leaf cost of the wide tree's collapse matters most.
+    for (const char* name : {"sponza-interior", "dragon-closeup", "cornell-box-reference"}) {
       const std::filesystem::path path = std::filesystem::path(TWINRAY_SOURCE_DIR) / "scenes" / (std::string(name) + ".json");
       if (std::filesystem::exists(path)) specs.push_back({name, "view", 0, path});
       else fmt::print(stderr, "twinray_bench: {} not found, scene '{}' left out\n", path.string(), name);

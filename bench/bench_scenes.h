@@ -44,7 +44,7 @@ const char* to_string(QueryKind query);
 
 // The scale series (every family at 1k, 4k, ..., max_triangles, powers of 4) followed by the meshes of
 // $TWINRAY_SHARED/data/meshes that exist (bunny, dragon, sponza) and, with them, the interior views
-// scenes/sponza-interior.json and scenes/dragon-closeup.json.
+// scenes/sponza-interior.json, scenes/dragon-closeup.json and scenes/cornell-box-reference.json.
 std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared);
 
 // Rays per ray set (same for every backend and thread count).

@@ -115,9 +115,11 @@ TEST(WideBvh, OneTrianglePutsOneLeafUnderTheRoot) {
   ASSERT_EQ(tree.nodes().size(), 1u);
   EXPECT_TRUE(WideRef::is_leaf(tree.nodes()[0].child[0]));
   expect_well_formed(tree, g);
-  // The root's visit plus one block test, each weighted by the root's area over itself.
+  // The root's visit plus one block test, each weighted by the root's area over itself, plus the memory
+  // price of the block's three empty lanes (padding_cost block_cost A(root) / 1 primitive each).
   const WideCollapseOptions costs;
-  EXPECT_DOUBLE_EQ(tree.build_stats().sah_cost, double(costs.node_cost) + double(costs.block_cost));
+  const double padding = 3.0 * double(costs.padding_cost) * double(costs.block_cost);
+  EXPECT_NEAR(tree.build_stats().sah_cost, double(costs.node_cost) + double(costs.block_cost) + padding, 1e-6);
   Ray ray;
   ray.org = {0.25f, 0.25f, 1.0f};
   ray.dir = {0.0f, 0.0f, -1.0f};
@@ -139,7 +141,7 @@ TEST(WideBvh, CollapseCostIsNoWorseThanKeepingEveryBinaryLeaf) {
   }
   const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), WideBuildOptions::default_binary());
   WideCollapseOptions merge, keep;
-  keep.max_leaf_size = 1;  // merging is then impossible (binary leaves hold more than one)
+  keep.max_leaf_size = 1;  // no merge can then form a leaf (binary leaves are kept whatever their size)
   const WideTree merged = collapse_to_wide(binary, merge);
   const WideTree kept = collapse_to_wide(binary, keep);
   EXPECT_GT(merged.sah_cost, 0.0);
@@ -150,12 +152,52 @@ TEST(WideBvh, CollapseCostIsNoWorseThanKeepingEveryBinaryLeaf) {
   EXPECT_LE(collapse_to_wide(binary, dear_nodes).nodes.size(), merged.nodes.size());
 }
 
+// Empty lanes of the leaves' last triangle blocks: the memory the collapse's padding_cost prices.
+std::size_t padded_lanes(const WideTree& tree) {
+  std::size_t lanes = 0;
+  for (const WideLeafRange& leaf : tree.leaves)
+    if (!leaf.spheres) lanes += (kTriangleBlockLanes - leaf.count % kTriangleBlockLanes) % kTriangleBlockLanes;
+  return lanes;
+}
+
+// padding_cost is a Lagrange multiplier on the padded lanes: the dynamic program minimises cost + price x
+// lanes exactly, so a higher price can only leave fewer (or as many) empty lanes. From binary leaves of one
+// triangle, where every leaf is the collapse's choice, a free padding leaves many.
+TEST(WideBvh, PaddingCostFillsTheLeavesBlocks) {
+  const SceneGeometry g = random_triangle_soup(5000, 9);
+  std::vector<Bounds3> bounds;
+  for (const glm::uvec3& t : g.meshes[0].indices) {
+    Bounds3 b = Bounds3::of_point(g.meshes[0].positions[t.x]);
+    b.extend(g.meshes[0].positions[t.y]);
+    b.extend(g.meshes[0].positions[t.z]);
+    bounds.push_back(b);
+  }
+  BvhBuildOptions singles = WideBuildOptions::default_binary();
+  singles.max_leaf_size = 1;
+  const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), singles);
+  std::size_t previous = static_cast<std::size_t>(-1);
+  for (const float price : {0.0f, 0.25f, 1.0f, 8.0f}) {
+    WideCollapseOptions o;
+    o.padding_cost = price;
+    const std::size_t lanes = padded_lanes(collapse_to_wide(binary, o));
+    EXPECT_LE(lanes, previous) << "padding_cost " << price;
+    previous = lanes;
+  }
+  WideCollapseOptions free_padding, dear_padding;
+  free_padding.padding_cost = 0.0f;
+  dear_padding.padding_cost = 8.0f;
+  EXPECT_LT(padded_lanes(collapse_to_wide(binary, dear_padding)), padded_lanes(collapse_to_wide(binary, free_padding)) / 2);
+}
+
 TEST(WideBvh, OptionsAreValidated) {
   WideBuildOptions o;
   o.collapse.max_leaf_size = 33;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
   o = {};
   o.collapse.node_cost = 0.0f;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o = {};
+  o.collapse.padding_cost = -1.0f;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
   o = {};
   o.binary.max_leaf_size = 40;

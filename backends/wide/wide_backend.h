@@ -23,11 +23,15 @@ struct WideBuildOptions {
   WideCollapseOptions collapse;
 
   // The binary tree the collapse starts from. Its leaves are the smallest the wide tree can have, so it
-  // is built with cheaper interior steps than the bvh backend's (1:1 instead of 3:1: leaves of about two
-  // triangles), and the collapse merges them where a bigger leaf pays (docs/bvh-backend.md).
+  // is built with cheaper interior steps than the bvh backend's (1:1 instead of 3:1) and leaves of at most
+  // three triangles, and the collapse merges them where a bigger leaf pays. Leaves of up to 8 left the
+  // collapse no choice inside them (a leaf of big triangles spanning a room stayed one leaf); up to 4 kept
+  // a ground plane's triangles in leaves with small ones; 1 or 2 give nearly the same wide trees as 3
+  // and cost 10% more build (docs/bvh-backend.md, "Cost model").
   static BvhBuildOptions default_binary() {
     BvhBuildOptions o;
     o.traversal_cost = 1.0f;
+    o.max_leaf_size = 3;
     return o;
   }
 };

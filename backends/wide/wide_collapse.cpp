@@ -14,6 +14,8 @@ namespace twinray {
 void validate(const WideCollapseOptions& o) {
   if (!(o.node_cost > 0.0f) || !(o.block_cost > 0.0f) || !std::isfinite(o.node_cost) || !std::isfinite(o.block_cost))
     throw std::invalid_argument("wide bvh: node_cost and block_cost must be positive and finite");
+  if (!(o.padding_cost >= 0.0f) || !std::isfinite(o.padding_cost) || !(o.volume_cost >= 0.0f) || !std::isfinite(o.volume_cost))
+    throw std::invalid_argument("wide bvh: padding_cost and volume_cost must be non-negative and finite");
   if (o.max_leaf_size < 1 || o.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
     throw std::invalid_argument("wide bvh: max_leaf_size must be in 1..32, got " + std::to_string(o.max_leaf_size));
 }
@@ -42,6 +44,15 @@ class Collapser {
 
   WideTree run() {
     const std::size_t n = bin_.nodes.size();
+    if (n != 0 && !bin_.prim_order.empty()) {
+      const float root_area = Bounds3{bin_.nodes[0].lo, bin_.nodes[0].hi}.half_area();
+      lane_penalty_ = o_.padding_cost * o_.block_cost * root_area / static_cast<float>(bin_.prim_order.size());
+      // In double: a volume of float extents neither overflows nor underflows there. A flat scene has no
+      // volume to weigh; an infinite area (coordinates near float's range) leaves the area alone.
+      const double root_volume = volume(bin_.nodes[0]);
+      if (root_volume > 0.0) volume_weight_ = double(o_.volume_cost) * double(root_area) / root_volume;
+      if (!std::isfinite(volume_weight_)) volume_weight_ = 0.0;
+    }
     sub_.resize(n);
     plan_.resize(n);
     // Children come after their parent in the depth-first array: a reverse sweep sees them first.
@@ -71,7 +82,8 @@ class Collapser {
     const BvhNode& node = bin_.nodes[i];
     Subtree& s = sub_[i];
     Plan& p = plan_[i];
-    s.area = Bounds3{node.lo, node.hi}.half_area();
+    // The weight a ray's chance of visiting the box is taken proportional to (wide_collapse.h).
+    s.area = Bounds3{node.lo, node.hi}.half_area() + static_cast<float>(volume_weight_ * volume(node));
     if (node.is_leaf()) {
       s.first = node.first_prim();
       s.count = node.prim_count();
@@ -120,9 +132,16 @@ class Collapser {
     p.k[1] = split_k[kW];  // reused: how a wide node at i splits its 8 slots between left and right
   }
 
+  static double volume(const BvhNode& node) {
+    const glm::vec3 e = glm::max(node.hi - node.lo, glm::vec3(0.0f));
+    return double(e.x) * double(e.y) * double(e.z);
+  }
+
   float leaf_cost(const Subtree& s) const {
     const std::uint32_t tests = s.spheres ? s.count : (s.count + kTriangleBlockLanes - 1) / kTriangleBlockLanes;
-    return o_.block_cost * s.area * static_cast<float>(tests);
+    const float cost = o_.block_cost * s.area * static_cast<float>(tests);
+    if (s.spheres) return cost;
+    return cost + lane_penalty_ * static_cast<float>(tests * kTriangleBlockLanes - s.count);
   }
 
   float split_cost(std::uint32_t i, int j) const {
@@ -177,7 +196,7 @@ class Collapser {
     const int k = plan_[i].k[1];
     distribute(i + 1, k, slots);
     distribute(bin_.nodes[i].second_child(), kW - k, slots);
-    // Larger area first: the any-hit visiting order (see wide_collapse.h).
+    // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
     std::stable_sort(slots.begin(), slots.end(), [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
 
     init_empty(out_->nodes[w]);
@@ -201,6 +220,8 @@ class Collapser {
   std::vector<Subtree> sub_;
   std::vector<Plan> plan_;
   WideTree* out_ = nullptr;
+  float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
+  double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume
 };
 
 }  // namespace

@@ -8,16 +8,23 @@
 //     cost(n, 1) = min( leaf(n), A(n) c_node + split(n, 8) )
 //     cost(n, j) = min( cost(n, j - 1), split(n, j) )                 j >= 2
 //     split(n, j) = min over k in 1..j-1 of cost(left, k) + cost(right, j - k)
-//     leaf(n)    = A(n) c_block blocks(n), when n's primitives may form one leaf
+//     leaf(n)    = A(n) c_block blocks(n) + c_pad empty_lanes(n), when n's primitives may form one leaf
 // with A the surface area (the probability of a ray hitting n's box is proportional to it), c_node the cost
 // of one wide node visit (eight boxes tested at once) and c_block the cost of one triangle-block test.
+// Two terms extend the paper's model (measurements in docs/bvh-backend.md): c_pad prices the empty lanes
+// of a leaf's last block, the memory small leaves waste (scaled by A(root) / N, so that it only outweighs
+// the speed terms where leaves are small, in dense regions), and A(n) may carry a volume term,
+// A(n) + c_vol V(n) A(root) / V(root): a secondary ray starts on a surface, inside the boxes around that
+// surface, and visits them whatever their area, which the area alone (rays from outside) misses; interior
+// views and scenes with a ground plane are made of such rays.
 // So the collapse does not just pull up the largest children (Embree's builders) or merge by area alone:
 // it decides per subtree whether a level of boxes pays for itself and where whole subtrees are cheaper as
 // one leaf, which a greedy pass cannot see.
 //
-// Children are stored larger area first: any-hit traversal visits them in stored order, which tries the
-// child most likely to hold an occluder first (Nah and Manocha, "SATO: surface area traversal order for
-// shadow ray tracing", CGF 2014); closest-hit traversal sorts by entry distance instead.
+// Children are stored larger weight (area plus the volume term) first: any-hit traversal visits them in
+// stored order, which tries the child most likely to hold an occluder first (Nah and Manocha, "SATO:
+// surface area traversal order for shadow ray tracing", CGF 2014); closest-hit traversal sorts by entry
+// distance instead.
 
 #include "backends/bvh/bvh_builder.h"
 #include "backends/wide/wide_node.h"
@@ -29,9 +36,18 @@ namespace twinray {
 
 struct WideCollapseOptions {
   // Cost of visiting one wide node and of testing one block of four triangles (or one sphere), in the
-  // same arbitrary unit; only the ratio matters. See docs/bvh-backend.md for the measurements.
+  // same arbitrary unit; only the ratio matters. A block test costs two node visits since every candidate
+  // the edge test accepts is refined to a certified t (about 90 instructions each); see
+  // docs/bvh-backend.md ("Cost model") for the measurements.
   float node_cost = 1.0f;
-  float block_cost = 1.0f;
+  float block_cost = 2.0f;
+  // Cost of one padded (empty) lane of a leaf's last triangle block, in units of block_cost times the
+  // root's area over the primitive count: a memory price that only small leaves of dense regions notice.
+  float padding_cost = 0.25f;
+  // Weight of a box's volume beside its surface area in the probability that a ray visits it, relative to
+  // the root's (a box's weight is A + volume_cost V A(root) / V(root)): rays that start inside a box (on
+  // the surfaces of an interior view) visit it whatever its area.
+  float volume_cost = 2.0f;
   // Largest leaf the collapse may form by merging a binary subtree (1..32 primitives); binary leaves are
   // kept whatever their size.
   int max_leaf_size = 8;
