@@ -31,16 +31,32 @@ Scene lit_floor_scene(int size) {
   return scene;
 }
 
+std::unique_ptr<Backend> built_bvh(const Scene& scene) {
+  std::unique_ptr<Backend> backend = make_backend("bvh");
+  backend->build(scene.geometry);
+  return backend;
+}
+
+// A scene's bvh, light sampler, context and camera: what a LightTracer reads (it keeps references).
+struct LightTracingSetup {
+  explicit LightTracingSetup(const Scene& scene)
+      : backend(built_bvh(scene)),
+        lights(scene, nullptr),
+        ctx(SceneContext::make(scene, *backend, nullptr, &lights)),
+        camera(scene.camera) {}
+  std::unique_ptr<Backend> backend;
+  LightSampler lights;
+  SceneContext ctx;
+  PinholeCamera camera;
+};
+
 // Mean and variance of the mean of the light tracer alone: N = spp * pixels light paths.
 compare::NoisyImage light_traced_image(const Scene& scene, const IntegratorSettings& settings, int spp,
                                        std::uint64_t seed, LightPathSet paths) {
   const ScopedFlushDenormals ftz;
-  std::unique_ptr<Backend> backend = make_backend("bvh");
-  backend->build(scene.geometry);
-  const LightSampler lights(scene, nullptr);
-  const SceneContext ctx = SceneContext::make(scene, *backend, nullptr, &lights);
-  const PinholeCamera camera(scene.camera);
-  const LightTracer tracer(ctx, settings, camera, SamplerKind::Independent, seed, paths);
+  const LightTracingSetup setup(scene);
+  const PinholeCamera& camera = setup.camera;
+  const LightTracer tracer(setup.ctx, settings, camera, SamplerKind::Independent, seed, paths);
   Film film(camera.width(), camera.height(), AuxChannels{});
   film.enable_splats();
   std::vector<Splat> splats;
@@ -91,12 +107,8 @@ TEST(CausticLightTracer, CausticsModeOnlyConnectsAfterASpecularFirstHit) {
   // The same floor and light without mirror or glass: no light path starts with a specular bounce.
   const Scene scene = lit_floor_scene(16);
   const ScopedFlushDenormals ftz;
-  std::unique_ptr<Backend> backend = make_backend("bvh");
-  backend->build(scene.geometry);
-  const LightSampler lights(scene, nullptr);
-  const SceneContext ctx = SceneContext::make(scene, *backend, nullptr, &lights);
-  const PinholeCamera camera(scene.camera);
-  const LightTracer tracer(ctx, IntegratorSettings{}, camera, SamplerKind::Sobol, 1);
+  const LightTracingSetup setup(scene);
+  const LightTracer tracer(setup.ctx, IntegratorSettings{}, setup.camera, SamplerKind::Sobol, 1);
   std::vector<Splat> splats;
   TraceCounters counters;
   std::uint64_t nonfinite = 0;
@@ -114,10 +126,8 @@ TEST(CausticLightTracer, EmissionSamplesCarryTheLightsPowerAndLeaveTheirFront) {
   add_quad(scene, {0, 2, 0}, {1, 0, 0}, {0, 0, 1}, add_material(scene, emissive({2, 2, 2})));   // faces down, A = 1
   add_quad(scene, {3, 0, 0}, {0, 0, 2}, {0, 1, 0}, add_material(scene, emissive({1, 0.5f, 0.25f})));  // A = 2
   add_sphere(scene, {-3, 1, 0}, 0.5f, add_material(scene, emissive({4, 4, 4})));
-  Environment env;
-  env.type = EnvironmentType::Constant;
-  env.radiance = glm::vec3(1.0f);
-  const auto sky = EnvironmentLight::create(env);
+  constant_environment(scene, glm::vec3(1.0f));
+  const auto sky = EnvironmentLight::create(scene.environment);
   const LightSampler lights(scene, sky.get());
   ASSERT_TRUE(lights.has_environment());
   ASSERT_TRUE(lights.has_surface_lights());

@@ -4,6 +4,7 @@
 
 #include "backends/bvh/bvh_builder.h"
 #include "backends/simd/isa.h"
+#include "backends/bvh/primitive_gather.h"
 #include "backends/wide/wide_backend.h"
 #include "backends/wide/wide_collapse.h"
 #include "core/scene/procedural.h"
@@ -132,13 +133,7 @@ TEST(WideBvh, OneTrianglePutsOneLeafUnderTheRoot) {
 // above that of the plain cut that keeps every binary leaf and pulls up children level by level.
 TEST(WideBvh, CollapseCostIsNoWorseThanKeepingEveryBinaryLeaf) {
   const SceneGeometry g = random_triangle_soup(5000, 9);
-  std::vector<Bounds3> bounds;
-  for (const glm::uvec3& t : g.meshes[0].indices) {
-    Bounds3 b = Bounds3::of_point(g.meshes[0].positions[t.x]);
-    b.extend(g.meshes[0].positions[t.y]);
-    b.extend(g.meshes[0].positions[t.z]);
-    bounds.push_back(b);
-  }
+  const std::vector<Bounds3> bounds = primitive_bounds(g);
   const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), WideBuildOptions::default_binary());
   WideCollapseOptions merge, keep;
   keep.max_leaf_size = 1;  // no merge can then form a leaf (binary leaves are kept whatever their size)
@@ -165,13 +160,7 @@ std::size_t padded_lanes(const WideTree& tree) {
 // triangle, where every leaf is the collapse's choice, a free padding leaves many.
 TEST(WideBvh, PaddingCostFillsTheLeavesBlocks) {
   const SceneGeometry g = random_triangle_soup(5000, 9);
-  std::vector<Bounds3> bounds;
-  for (const glm::uvec3& t : g.meshes[0].indices) {
-    Bounds3 b = Bounds3::of_point(g.meshes[0].positions[t.x]);
-    b.extend(g.meshes[0].positions[t.y]);
-    b.extend(g.meshes[0].positions[t.z]);
-    bounds.push_back(b);
-  }
+  const std::vector<Bounds3> bounds = primitive_bounds(g);
   BvhBuildOptions singles = WideBuildOptions::default_binary();
   singles.max_leaf_size = 1;
   const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), singles);
