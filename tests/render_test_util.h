@@ -116,10 +116,16 @@ struct Rendered {
   RenderStats stats;
 };
 
+// The named backend, built over the scene's geometry.
+inline std::unique_ptr<Backend> built_backend(const Scene& scene, const std::string& name = "bvh") {
+  std::unique_ptr<Backend> backend = make_backend(name);
+  backend->build(scene.geometry);
+  return backend;
+}
+
 inline Rendered render_scene(const Scene& scene, const RenderOptions& options, const std::string& backend_name = "bvh") {
   const ScopedFlushDenormals ftz;
-  std::unique_ptr<Backend> backend = make_backend(backend_name);
-  backend->build(scene.geometry);
+  const std::unique_ptr<Backend> backend = built_backend(scene, backend_name);
   RenderOptions opt = options;
   opt.show_progress = false;
   opt.aux.albedo = true;

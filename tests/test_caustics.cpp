@@ -31,16 +31,10 @@ Scene lit_floor_scene(int size) {
   return scene;
 }
 
-std::unique_ptr<Backend> built_bvh(const Scene& scene) {
-  std::unique_ptr<Backend> backend = make_backend("bvh");
-  backend->build(scene.geometry);
-  return backend;
-}
-
 // A scene's bvh, light sampler, context and camera: what a LightTracer reads (it keeps references).
 struct LightTracingSetup {
   explicit LightTracingSetup(const Scene& scene)
-      : backend(built_bvh(scene)),
+      : backend(built_backend(scene)),
         lights(scene, nullptr),
         ctx(SceneContext::make(scene, *backend, nullptr, &lights)),
         camera(scene.camera) {}

@@ -133,8 +133,7 @@ TEST(IntegratorAnalytic, DiffusePlaneUnderSquareLightMatchesLambertsPolygonFormu
   const double expected = albedo / std::numbers::pi * polygon_irradiance(corners, p, {0, 1, 0}, Le);
 
   const ScopedFlushDenormals ftz;
-  std::unique_ptr<Backend> backend = make_backend("bvh");
-  backend->build(scene.geometry);
+  const std::unique_ptr<Backend> backend = built_backend(scene);
   RenderOptions opt;
   const RenderSetup setup(scene, opt, backend->traits());
   const SceneContext ctx = SceneContext::make(scene, *backend, setup.environment(), setup.lights());

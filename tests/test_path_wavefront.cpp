@@ -29,8 +29,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
   // Mirror, glass, diffuse and an emitter: every BSDF kind and both kinds of shape.
   Scene scene = load_scene(std::filesystem::path(TWINRAY_SOURCE_DIR) / "scenes/cornell-mirror-glass.json");
   const ScopedFlushDenormals ftz;
-  std::unique_ptr<Backend> backend = make_backend("bvh8");
-  backend->build(scene.geometry);
+  const std::unique_ptr<Backend> backend = built_backend(scene, "bvh8");
   RenderOptions opt;
   const RenderSetup setup(scene, opt, backend->traits());
   const SceneContext ctx = SceneContext::make(scene, *backend, setup.environment(), setup.lights());
