@@ -41,30 +41,34 @@ class BruteBackend final : public Backend {
     // The winner's shape, for the attributes computed once at the end.
     const TriangleMesh* best_mesh = nullptr;
     const Sphere* best_sphere = nullptr;
+    // The end of the interval still searched: the closest hit's t so far (closed, so an equidistant hit still
+    // reaches `precedes`). Kept in a local, and the mesh's arrays too: stores to `hit` could alias them, and
+    // the loop would reload them for every triangle.
+    float tmax = ray.tmax;
     for (const TriangleMesh& mesh : geometry_->meshes) {
-      for (std::size_t i = 0; i < mesh.indices.size(); ++i) {
-        const glm::uvec3& tri = mesh.indices[i];
+      const glm::uvec3* indices = mesh.indices.data();
+      const glm::vec3* p = mesh.positions.data();
+      const std::size_t count = mesh.indices.size();
+      for (std::size_t i = 0; i < count; ++i) {
+        const glm::uvec3 tri = indices[i];
         float t;
-        // tmax = hit.t (closed): an equidistant hit still reaches `precedes`. t only: the winner's u, v are
-        // computed once, at the end.
-        if (!intersect_triangle_t(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
-                                  ray.tmin, std::min(ray.tmax, hit.t), t))
-          continue;
+        // t only: the winner's u, v are computed once, at the end.
+        if (!intersect_triangle_t(tri_ray, p[tri.x], p[tri.y], p[tri.z], ray.tmin, tmax, t)) continue;
         const auto prim_id = static_cast<std::uint32_t>(i);
         if (!precedes(t, mesh.geom_id, prim_id, hit)) continue;
-        hit.t = t;
+        hit.t = tmax = t;
         hit.geom_id = mesh.geom_id;
         hit.prim_id = prim_id;
         best_mesh = &mesh;
         best_sphere = nullptr;
       }
-      if (stats) stats->primitives_tested += mesh.indices.size();
+      if (stats) stats->primitives_tested += count;
     }
     for (const Sphere& s : geometry_->spheres) {
       float t;
-      if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, std::min(ray.tmax, hit.t), t)) continue;
+      if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
       if (!precedes(t, s.geom_id, 0, hit)) continue;
-      hit.t = t;
+      hit.t = tmax = t;
       hit.geom_id = s.geom_id;
       hit.prim_id = 0;
       best_mesh = nullptr;
@@ -89,10 +93,10 @@ class BruteBackend final : public Backend {
     std::uint64_t tested = 0;
     bool found = false;
     for (const TriangleMesh& mesh : geometry_->meshes) {
+      const glm::vec3* p = mesh.positions.data();
       for (const glm::uvec3& tri : mesh.indices) {
         ++tested;
-        if (intersect_triangle_any(tri_ray, mesh.positions[tri.x], mesh.positions[tri.y], mesh.positions[tri.z],
-                                   ray.tmin, ray.tmax)) {
+        if (intersect_triangle_any(tri_ray, p[tri.x], p[tri.y], p[tri.z], ray.tmin, ray.tmax)) {
           found = true;
           break;
         }

@@ -156,6 +156,10 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
   float u = rounded(cx * by) - rounded(cy * bx);
   float v = rounded(ax * cy) - rounded(ay * cx);
   float w = rounded(bx * ay) - rounded(by * ax);
+  // Mixed signs first: it rejects almost every triangle a ray is tested against, and it is right even when
+  // another edge function is exactly 0, since a non-zero one has the exact sign (above): the double path
+  // below would reject the same triangle.
+  if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
   if (u == 0.0f || v == 0.0f || w == 0.0f) {
     // Exact in double: each product of two floats fits in 48 bits, and the difference is rounded once,
     // which preserves its sign (and contraction into an FMA cannot change an exact product).
@@ -171,8 +175,6 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
     u = static_cast<float>(du);
     v = static_cast<float>(dv);
     w = static_cast<float>(dw);
-  } else if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) {
-    return false;
   }
 
   const float det = u + v + w;
