@@ -13,8 +13,8 @@
 #include "core/exact/exact_triangle.h"
 #include "core/intersect/triangle_watertight.h"
 #include "core/sampling/rng.h"
-#include "core/scene/geometry_cleanup.h"
 #include "ray_test_util.h"
+#include "sliver_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -22,7 +22,6 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <string>
 #include <vector>
 
@@ -31,53 +30,27 @@ namespace {
 
 using test::same_bits;
 
-glm::vec3 to_float(const glm::dvec3& v) {
-  return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)};
-}
+using test::to_float;
 
-struct TriangleSet {
-  SceneGeometry geometry;
-  std::vector<Ray> rays;
-};
+using TriangleSet = test::SliverSet;
 
 // 48 triangles of aspect 1 to 1e4 in random orientations, each shot through an interior point from 0.05 to 90
 // degrees above its plane (grazing ones half of the time), from either side.
 TriangleSet triangle_set(std::uint64_t seed) {
-  TriangleSet s;
-  Rng rng(seed, 0);
-  TriangleMesh mesh;
-  const auto sym = [&rng] { return 2.0 * rng.next_float() - 1.0; };
-  for (int k = 0; k < 48; ++k) {
-    const double aspect = std::pow(10.0, 4.0 * rng.next_float());
-    const glm::dvec3 n = glm::normalize(glm::dvec3(sym(), sym(), sym() + 1e-3));
-    const glm::dvec3 along = glm::normalize(glm::cross(n, glm::dvec3(sym(), sym(), sym()) + glm::dvec3(1e-3)));
-    const glm::dvec3 across = glm::cross(n, along);
-    const glm::dvec3 base = 3.0 * glm::dvec3(sym(), sym(), sym());
-    const glm::dvec3 p[3] = {base, base + along, base + 0.5 * along + across / aspect};
-    const auto first = static_cast<std::uint32_t>(mesh.positions.size());
-    for (const glm::dvec3& v : p) mesh.positions.push_back(to_float(v));
-    mesh.indices.push_back({first, first + 1, first + 2});
-    for (int r = 0; r < 16; ++r) {
-      double a = rng.next_float(), b = rng.next_float();
-      if (a + b > 1.0) {
-        a = 1.0 - a;
-        b = 1.0 - b;
-      }
-      const glm::dvec3 target = p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]);
-      const double degrees = rng.next_below(2) ? 0.05 * std::pow(20.0, static_cast<double>(rng.next_float()))
-                                                 : 90.0 * static_cast<double>(rng.next_float()) + 0.01;
-      const double theta = degrees * std::numbers::pi / 180.0;
-      const glm::dvec3 side = glm::normalize(glm::cross(n, glm::dvec3(sym(), sym(), sym())));
-      const glm::dvec3 d = std::cos(theta) * side + (rng.next_below(2) ? 1.0 : -1.0) * std::sin(theta) * n;
-      Ray ray;
-      ray.org = to_float(target - (0.1 + 4.0 * rng.next_float()) * d);
-      ray.dir = to_float(d * (0.25 + 2.0 * rng.next_float()));  // not normalized: t is not a distance
-      s.rays.push_back(ray);
-    }
-  }
-  ensure_vertex_padding(mesh.positions);
-  s.geometry.meshes.push_back(std::move(mesh));
-  return s;
+  test::SliverSetParams params;
+  params.triangles = 48;
+  params.rays_per_triangle = 16;
+  params.log10_aspect_min = 0.0;
+  params.log10_aspect_span = 4.0;
+  params.base_extent = 3.0;
+  params.degrees = [](Rng& rng) {
+    return rng.next_below(2) ? 0.05 * std::pow(20.0, static_cast<double>(rng.next_float()))
+                             : 90.0 * static_cast<double>(rng.next_float()) + 0.01;
+  };
+  params.distance_min = 0.1;
+  params.distance_span = 4.0;
+  params.direction_scale = [](Rng& rng) { return 0.25 + 2.0 * rng.next_float(); };  // t is not a distance
+  return test::sliver_set(seed, params);
 }
 
 // The normal as triangle_geometric_normal has always computed it: the cross product in double, normalized.

@@ -9,25 +9,24 @@
 #include "core/exact/exact_triangle.h"
 #include "core/intersect/woop_axes.h"
 #include "core/sampling/rng.h"
-#include "core/scene/geometry_cleanup.h"
 #include "core/scene/scene_loader.h"
 #include "core/scene/shared_data.h"
 #include "ray_test_util.h"
+#include "sliver_test_util.h"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
-#include <numbers>
 #include <vector>
 
 namespace twinray {
 namespace {
 
 using test::same_bits;
-
-glm::vec3 rounded(const glm::dvec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+using test::sliver_set;
+using test::SliverSet;
 
 // Woop's own t, the weighted sum of sheared z over the determinant, as the watertight test computed it before
 // the refinement (every product rounded to float): to show that the rays below are ones it gets wrong.
@@ -49,47 +48,9 @@ float woop_float_t(const glm::vec3& org, const glm::vec3& dir, const glm::vec3& 
   return (q[0] + q[1] + q[2]) * (1.0f / (u + v + w));
 }
 
-// Slivers of aspect 1e2..1e5 in random orientations, each shot through an interior point at 1e-4..1 degree.
-struct SliverSet {
-  SceneGeometry geometry;
-  std::vector<Ray> rays;
-};
-
-SliverSet grazing_sliver_set(std::uint64_t seed) {
-  SliverSet s;
-  Rng rng(seed, 0);
-  TriangleMesh mesh;
-  const auto sym = [&rng] { return 2.0 * rng.next_float() - 1.0; };
-  for (int k = 0; k < 64; ++k) {
-    const double aspect = std::pow(10.0, 2.0 + 3.0 * rng.next_float());
-    const glm::dvec3 n = glm::normalize(glm::dvec3(sym(), sym(), sym() + 1e-3));
-    const glm::dvec3 along = glm::normalize(glm::cross(n, glm::dvec3(sym(), sym(), sym()) + glm::dvec3(1e-3)));
-    const glm::dvec3 across = glm::cross(n, along);
-    const glm::dvec3 base = 2.0 * glm::dvec3(sym(), sym(), sym());
-    const glm::dvec3 p[3] = {base, base + along, base + 0.5 * along + across / aspect};
-    const auto first = static_cast<std::uint32_t>(mesh.positions.size());
-    for (const glm::dvec3& v : p) mesh.positions.push_back(rounded(v));
-    mesh.indices.push_back({first, first + 1, first + 2});
-    for (int r = 0; r < 24; ++r) {
-      double a = rng.next_float(), b = rng.next_float();
-      if (a + b > 1.0) {
-        a = 1.0 - a;
-        b = 1.0 - b;
-      }
-      const glm::dvec3 target = p[0] + a * (p[1] - p[0]) + b * (p[2] - p[0]);
-      const double theta = 1e-4 * std::pow(1e4, static_cast<double>(rng.next_float())) * std::numbers::pi / 180.0;
-      const glm::dvec3 side = glm::normalize(glm::cross(n, glm::dvec3(sym(), sym(), sym())));
-      const glm::dvec3 d = std::cos(theta) * side + (rng.next_below(2) ? 1.0 : -1.0) * std::sin(theta) * n;
-      Ray ray;
-      ray.org = rounded(target - (0.2 + rng.next_float()) * d);
-      ray.dir = rounded(d);
-      s.rays.push_back(ray);
-    }
-  }
-  ensure_vertex_padding(mesh.positions);
-  s.geometry.meshes.push_back(std::move(mesh));
-  return s;
-}
+// Slivers of aspect 1e2..1e5 in random orientations, each shot through an interior point at 1e-4..1 degree
+// (the defaults of SliverSetParams).
+SliverSet grazing_sliver_set(std::uint64_t seed) { return sliver_set(seed, {}); }
 
 TEST(RefinedT, GrazingHitsOnSliversAreCorrectlyRoundedInBvhAndBrute) {
   const SliverSet set = grazing_sliver_set(3);
