@@ -10,11 +10,16 @@
 //   --twinray_backends=LIST          default embree-fast,bvh8,bvh,embree,brute (embree-fast always runs first)
 //   --twinray_brute_max_triangles=N  brute force only on scenes up to N triangles (default 1024)
 //   --twinray_meshes=0               leave out the shared meshes
+//   --twinray_scenes=FILE[,FILE...]  also benchmark these scene files (.json, Mitsuba .xml, or a bare .obj /
+//                                    .ply mesh), named by their stem; with --twinray_max_triangles=0 and
+//                                    --twinray_meshes=0, only them. A file that does not load is an error
+//                                    (exit code 2) before anything runs.
 // The shared meshes are read from $TWINRAY_SHARED/data/meshes (scenes whose file is missing are left out),
 // and with them the interior views scenes/sponza-interior.json, scenes/dragon-closeup.json and
 // scenes/cornell-box-reference.json.
 
 #include "bench/bench_registration.h"
+#include "core/scene/scene_loader.h"
 
 #include <OpenImageIO/oiioversion.h>
 #include <embree3/rtcore_config.h>
@@ -23,6 +28,8 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <exception>
+#include <filesystem>
 #include <cstdlib>
 #include <optional>
 #include <sstream>
@@ -41,6 +48,7 @@ struct BenchOptions {
   std::vector<std::string> backends = {"embree-fast", "bvh8", "bvh", "embree", "brute"};
   std::size_t brute_max_triangles = 1024;
   bool meshes = true;
+  std::vector<std::filesystem::path> scenes;
 };
 
 std::vector<std::string> split(const std::string& list) {
@@ -72,6 +80,8 @@ BenchOptions take_twinray_flags(int& argc, char** argv) {
     else if (auto b = value_of("twinray_backends")) o.backends = split(*b);
     else if (auto m = value_of("twinray_brute_max_triangles")) o.brute_max_triangles = std::stoull(*m);
     else if (auto s = value_of("twinray_meshes")) o.meshes = *s != "0";
+    else if (auto f = value_of("twinray_scenes"))
+      for (const std::string& path : split(*f)) o.scenes.emplace_back(path);
     else argv[kept++] = argv[i];
   }
   argc = kept;
@@ -92,7 +102,7 @@ std::size_t expected_triangles(const BenchSceneSpec& spec) {
 void register_benchmarks(const BenchOptions& o) {
   std::optional<std::filesystem::path> shared;
   if (const char* env = std::getenv("TWINRAY_SHARED"); env && *env && o.meshes) shared = std::filesystem::path(env);
-  for (const BenchSceneSpec& spec : scene_specs(o.max_triangles, shared)) {
+  for (const BenchSceneSpec& spec : scene_specs(o.max_triangles, shared, o.scenes)) {
     std::vector<std::string> backends;
     for (const std::string& b : o.backends)
       if (b != "brute" || expected_triangles(spec) <= o.brute_max_triangles) backends.push_back(b);
@@ -115,10 +125,35 @@ void register_benchmarks(const BenchOptions& o) {
   }
 }
 
+// Loads every user scene once before anything is registered, so that a missing or malformed file stops the
+// run with the loader's message (which names the file and the place) instead of failing half-way through.
+bool user_scenes_load(const BenchOptions& o) {
+  for (const std::filesystem::path& path : o.scenes) {
+    try {
+      const twinray::Scene scene = twinray::load_scene(path);
+      if (scene.geometry.triangle_count() + scene.geometry.sphere_count() == 0) {
+        fmt::print(stderr, "twinray_bench: {}: the scene has no primitives to trace\n", path.string());
+        return false;
+      }
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "twinray_bench: {}\n", e.what());
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  const BenchOptions options = take_twinray_flags(argc, argv);
+  BenchOptions options;
+  try {
+    options = take_twinray_flags(argc, argv);
+  } catch (const std::exception& e) {  // std::stoull / std::stoi on a malformed number
+    fmt::print(stderr, "twinray_bench: bad --twinray_* value: {}\n", e.what());
+    return 2;
+  }
+  if (!user_scenes_load(options)) return 2;
   set_rays_per_set(options.rays);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

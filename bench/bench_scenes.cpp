@@ -7,6 +7,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 
@@ -68,7 +69,8 @@ crosscheck::RayKind crosscheck_kind(BenchRayKind kind) {
 
 const char* to_string(QueryKind query) { return query == QueryKind::Closest ? "closest" : "any"; }
 
-std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared) {
+std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared,
+                                        const std::vector<std::filesystem::path>& extra) {
   std::vector<BenchSceneSpec> specs;
   for (BenchFamily family : kAllBenchFamilies)
     for (std::size_t n = 1024; n <= max_triangles; n *= 4)
@@ -89,6 +91,17 @@ std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::op
       if (std::filesystem::exists(path)) specs.push_back({name, "view", 0, path});
       else fmt::print(stderr, "twinray_bench: {} not found, scene '{}' left out\n", path.string(), name);
     }
+  }
+  for (const std::filesystem::path& path : extra) {
+    const std::string stem = path.stem().string();
+    std::string name = stem;
+    const auto taken = [&specs](const std::string& n) {
+      return std::any_of(specs.begin(), specs.end(), [&n](const BenchSceneSpec& s) { return s.name == n; });
+    };
+    for (int k = 2; taken(name); ++k) name = fmt::format("{}-{}", stem, k);
+    const std::string ext = path.extension().string();
+    const bool bare_mesh = ext == ".obj" || ext == ".OBJ" || ext == ".ply" || ext == ".PLY";
+    specs.push_back({name, bare_mesh ? "mesh" : "view", 0, path});
   }
   return specs;
 }

@@ -44,8 +44,11 @@ const char* to_string(QueryKind query);
 
 // The scale series (every family at 1k, 4k, ..., max_triangles, powers of 4) followed by the meshes of
 // $TWINRAY_SHARED/data/meshes that exist (bunny, dragon, sponza) and, with them, the interior views
-// scenes/sponza-interior.json, scenes/dragon-closeup.json and scenes/cornell-box-reference.json.
-std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared);
+// scenes/sponza-interior.json, scenes/dragon-closeup.json and scenes/cornell-box-reference.json; then the
+// user's own scene files (`extra`), named by their stem (made unique with -2, -3, ...): a bare mesh (.obj,
+// .ply) in family "mesh", a scene file (.json, Mitsuba .xml) with its own camera and lights in family "view".
+std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::optional<std::filesystem::path>& shared,
+                                        const std::vector<std::filesystem::path>& extra = {});
 
 // Rays per ray set (same for every backend and thread count).
 void set_rays_per_set(std::size_t count);
