@@ -11,7 +11,9 @@
 # Knobs (environment): TWINRAY_OUT (default out/), TWINRAY_BUILD_DIR (default build/), TWINRAY_SHARED
 # (default ../shared; meshes are left out when absent), BENCH_MIN_TIME (seconds per benchmark, default
 # 0.05), BENCH_MAX_TRIANGLES (largest scale-series scene, default 1048576 = 1M; 4194304 adds the 4M scenes and about five minutes), CONVERGE_BUDGET (seconds per
-# backend and strategy, default 6), CONVERGE_REFERENCE_SPP (default 512).
+# backend and strategy, default 6), CONVERGE_REFERENCE_SPP (default 512), BENCH_SCENES (comma-separated scene
+# files of your own, .json / Mitsuba .xml / .obj / .ply, benchmarked beside the bundled ones and given a
+# heatmap in the report).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${TWINRAY_BUILD_DIR:-$root/build}"
@@ -20,6 +22,7 @@ min_time="${BENCH_MIN_TIME:-0.05}"
 max_triangles="${BENCH_MAX_TRIANGLES:-1048576}"
 budget="${CONVERGE_BUDGET:-6}"
 reference_spp="${CONVERGE_REFERENCE_SPP:-512}"
+user_scenes="${BENCH_SCENES:-}"
 
 if [ -z "${TWINRAY_SHARED:-}" ] && [ -d "$root/../shared" ]; then
   export TWINRAY_SHARED="$(cd "$root/../shared" && pwd)"
@@ -36,6 +39,7 @@ mkdir -p "$out"
 
 "$build/bench/twinray_bench" \
   --twinray_max_triangles="$max_triangles" \
+  ${user_scenes:+--twinray_scenes="$user_scenes"} \
   --benchmark_min_time="$min_time" \
   --benchmark_out="$out/bench.json" --benchmark_out_format=json \
   --benchmark_counters_tabular=false | tee "$out/bench.txt"
@@ -52,6 +56,8 @@ for mesh in stanford-bunny.obj dragon_100k.ply dabrovic_sponza.obj; do
     heatmaps+=(--heatmap "$TWINRAY_SHARED/data/meshes/$mesh")
   fi
 done
+IFS=',' read -r -a user_scene_list <<< "$user_scenes"
+for scene in "${user_scene_list[@]}"; do heatmaps+=(--heatmap "$scene"); done
 "$build/cli/twinray" report --bench "$out/bench.json" --converge "$out/converge-cornell-box" "${heatmaps[@]}" \
   --out "$out/report"
 echo "twinray bench: report at $out/report/report.html ($(( $(date +%s) - start )) s in all)" >&2
