@@ -74,10 +74,13 @@ TEST(HitComparison, IdenticalWhenSamePrimitiveAndCloseT) {
 TEST(HitComparison, InfiniteTNeverAgreesWithAFiniteOne) {
   const SceneGeometry g = square_scene();
   const GeometryIndex index(g);
-  const Ray ray = down_at(0.7f, 0.2f);
+  // Oblique, so that every coordinate of the point at t = +inf is infinite (and its tolerance with it).
+  Ray ray = down_at(0.6f, 0.1f);
+  ray.dir = {0.1f, 0.1f, -1.0f};
   const float inf = std::numeric_limits<float>::infinity();
   EXPECT_FALSE(t_agrees(index, ray, inf, 1.0f));
   EXPECT_FALSE(t_agrees(index, ray, 1.0f, inf));
+  EXPECT_FALSE(hit_is_ambiguous(index, ray, triangle_hit(0, 0, inf, 0.5f, 0.2f)));
   const PairComparison c =
       run(index, {{ray, triangle_hit(0, 0, inf, 0.5f, 0.2f), triangle_hit(0, 0, 1.0f, 0.5f, 0.2f)}});
   EXPECT_EQ(c.identical, 0u);

@@ -69,6 +69,8 @@ bool t_agrees(const GeometryIndex& index, const Ray& ray, float ta, float tb) {
 
 bool hit_is_ambiguous(const GeometryIndex& index, const Ray& ray, const Hit& hit) {
   if (!hit.found()) return false;
+  // A hit at t = +inf is on no boundary: its point is infinite, and so would be the tolerance around it.
+  if (!std::isfinite(hit.t)) return false;
   // At the ends of the ray's interval a hit may fall just inside for one backend and just outside for another.
   if (t_agrees(index, ray, hit.t, ray.tmin) || (std::isfinite(ray.tmax) && t_agrees(index, ray, hit.t, ray.tmax)))
     return true;
