@@ -179,6 +179,17 @@ TEST(GradePlugins, RunningOutOfCheckTimeIsReproducedByTheCheckNotARay) {
   std::filesystem::remove_all(dir);
 }
 
+// A crash that only concurrent calls provoke is the race's, not the ray's: the reproduce line reruns the
+// check (tracing the ray it hit would answer normally).
+TEST(GradePlugins, CrashUnderConcurrencyIsReproducedByTheCheck) {
+  const Scorecard card = grade(scotty_plugin("concurrent-crash"), {"closest-soup", "thread-safety-soup"});
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);
+  const CheckResult& c = check_named(card, "thread-safety-soup");
+  EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
+  EXPECT_NE(c.reproduce.find("--check thread-safety-soup"), std::string::npos) << c.reproduce;
+  EXPECT_EQ(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
+}
+
 TEST(GradePlugins, SameScorecardTwice) {
   const std::vector<std::string> checks = {"closest-soup", "ray-interval-soup", "axis-aligned-box", "watertight-ball"};
   const Scorecard a = grade(scotty_plugin("lost-primitive"), checks), b = grade(scotty_plugin("lost-primitive"), checks);

@@ -67,7 +67,10 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
     const FailureReport f = classify_failure(std::current_exception(), ctx.spec.ray_time_limit_seconds);
     r.outcome = f.outcome;
     r.detail = one_line(f.detail);  // the plugin's build error message or exception text, as one safe line
-    r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    // One ray replays a crash or hang only when it happened to that ray alone: under the thread-safety check's
+    // concurrent calls, a crash is the race's, and tracing the ray it hit answers normally.
+    const bool concurrent = ctx.spec.category == Category::ThreadSafety;
+    r.reproduce = f.ray && !concurrent ? ctx.trace_command(*f.ray) : ctx.grade_command();
     if (!f.output.empty()) r.figures["plugin_output"] = f.output;
   }
 }

@@ -20,6 +20,8 @@
 //  13 INFINITE_T       t = +inf on rays without an end, whatever the hit (a "no hit yet" value left in place)
 //  14 TINY_SAH         a correct tree whose reported SAH cost is 1e-6 (no tree of a non-empty scene costs
 //                      less than 1, its root)
+//  15 CONCURRENT_CRASH  crashes when two closest-hit calls are inside it at once (what a race on a shared
+//                      buffer does): only concurrent calls show it, and no single ray replays it
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -30,6 +32,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -538,9 +541,22 @@ void try_to_cheat() {
 }
 #endif
 
+#if BUG(15)
+std::atomic<int> g_inside{0};
+#endif
+
 int scotty_intersect1(const void* self, const twinray_ray* r, twinray_hit* hit, twinray_query_stats* stats) {
 #if BUG(10)
   try_to_cheat();
+#endif
+#if BUG(15)
+  if (g_inside.fetch_add(1) > 0) {
+    volatile int* volatile nowhere = nullptr;
+    *nowhere = 1;
+  }
+  struct Leave {
+    ~Leave() { g_inside.fetch_sub(1); }
+  } leave;
 #endif
   const Ray ray = to_ray(r);
   const Trace t = static_cast<const BVH*>(self)->hit(ray, *stats);
