@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
 #include <map>
 
 namespace twinray::grade {
@@ -98,7 +100,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"infinite-loop", "axis-aligned-box", Outcome::Timeout, "", "closest-soup"},
                       BugCase{"shared-stack", "thread-safety-soup", Outcome::Fail, "concurrent answers differ",
                               "closest-soup"},
-                      BugCase{"anyhit-tmax", "any-hit-cornell", Outcome::Fail, "plugin says occluded", "closest-cornell"}),
+                      BugCase{"anyhit-tmax", "any-hit-cornell", Outcome::Fail, "plugin says occluded", "closest-cornell"},
+                      // Right primitive, right t: only the attributes give these away (hit_attributes.h).
+                      BugCase{"swapped-uv", "closest-cornell", Outcome::Fail, "wrong attributes: u", "any-hit-cornell"},
+                      BugCase{"flipped-normal", "closest-soup", Outcome::Fail, "wrong attributes: ng", "any-hit-cornell"},
+                      // t = +inf once agreed with every finite t (1e-4 * inf is inf).
+                      BugCase{"infinite-t", "closest-soup", Outcome::Fail, "at t inf", "any-hit-cornell"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -115,6 +122,72 @@ TEST(GradePlugins, CheatingPluginIsStoppedBySandbox) {
     EXPECT_NE(c.detail.find("sandbox"), std::string::npos) << c.detail;
   }
   EXPECT_FALSE(std::filesystem::exists(mark)) << "the plugin wrote " << mark;
+}
+
+// A reported SAH cost below 1 (the cost of the root alone) is no tree's: it must not pass max_sah_ratio as a
+// tiny ratio.
+TEST(GradePlugins, ImpossibleSahCostFailsTheThreshold) {
+  const Scorecard card = grade(scotty_plugin("tiny-sah"), {"closest-soup", "tree-quality-soup"});
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);
+  const CheckResult& c = check_named(card, "tree-quality-soup");
+  EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
+  EXPECT_NE(c.detail.find("impossible SAH cost"), std::string::npos) << c.detail;
+  // The correct tree passes the same threshold.
+  const Scorecard good = grade(scotty_plugin(), {"closest-soup", "tree-quality-soup"});
+  EXPECT_EQ(check_named(good, "tree-quality-soup").outcome, Outcome::Pass) << lines(good);
+}
+
+// What a plugin names itself and says when its build fails reaches the scorecard as one line of plain text:
+// no terminal escapes, no line breaks (a fake "pass" line), valid UTF-8.
+TEST(GradePlugins, PluginTextCannotBreakTheScorecard) {
+  const Scorecard card = grade(TWINRAY_TEST_HOSTILE_BUILD_ESCAPES_PLUGIN, {"build-empty"});
+  const CheckResult& c = check_named(card, "build-empty");
+  EXPECT_EQ(c.outcome, Outcome::Fail);
+  for (const std::string& text : {c.detail, card.plugin_name}) {
+    for (const char ch : text) EXPECT_GE(static_cast<unsigned char>(ch), 0x20) << text;
+    EXPECT_EQ(text.find("\xc2\x9b"), std::string::npos) << text;  // the C1 escape (CSI)
+  }
+  EXPECT_NE(c.detail.find("\\x1b[2J"), std::string::npos) << c.detail;  // shown, not obeyed
+  EXPECT_NE(card.plugin_name.find("hostile\\x0a"), std::string::npos) << card.plugin_name;
+  // Two lines: the check's and its reproduce line.
+  const std::string line = terminal_check_line(c);
+  EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 2) << line;
+}
+
+// When the check's time runs out while a ray had only just entered the plugin, that ray is not the culprit:
+// the reproduce line reruns the check instead of tracing a ray that answers at once.
+TEST(GradePlugins, RunningOutOfCheckTimeIsReproducedByTheCheckNotARay) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "twinray-grade-deadline-test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream manifest(dir / "manifest.json");
+    // brute force over 20,000 triangles, 8 threads at once, on a time limit far too short for it.
+    manifest << R"({"suite": "deadline", "scenes": {"soup": "procedural:soup:20000:7"},
+      "checks": [{"name": "threads", "category": "thread-safety", "scene": "soup", "count": 8000, "threads": 8,
+                  "repeat": 50, "time_limit": 1.5, "ray_time_limit": 2, "points": 1}]})";
+  }
+  GradeSettings s;
+  s.plugin = TWINRAY_TEST_BRUTE_PLUGIN;
+  s.suite = dir.string();
+  s.twinray = TWINRAY_BINARY;
+  const Scorecard card = run_grade(s);
+  const CheckResult& c = check_named(card, "threads");
+  EXPECT_EQ(c.outcome, Outcome::Timeout) << terminal_check_line(c);
+  EXPECT_NE(c.detail.find("time_limit"), std::string::npos) << c.detail;
+  EXPECT_NE(c.reproduce.find("--check threads"), std::string::npos) << c.reproduce;
+  EXPECT_EQ(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
+  std::filesystem::remove_all(dir);
+}
+
+// A crash that only concurrent calls provoke is the race's, not the ray's: the reproduce line reruns the
+// check (tracing the ray it hit would answer normally).
+TEST(GradePlugins, CrashUnderConcurrencyIsReproducedByTheCheck) {
+  const Scorecard card = grade(scotty_plugin("concurrent-crash"), {"closest-soup", "thread-safety-soup"});
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);
+  const CheckResult& c = check_named(card, "thread-safety-soup");
+  EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
+  EXPECT_NE(c.reproduce.find("--check thread-safety-soup"), std::string::npos) << c.reproduce;
+  EXPECT_EQ(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
 }
 
 TEST(GradePlugins, SameScorecardTwice) {

@@ -141,6 +141,10 @@ TEST(GradeReports, TextSafety) {
   EXPECT_EQ(valid_utf8("\xed\xa0\x80"), "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");  // a surrogate is not UTF-8
   EXPECT_EQ(valid_utf8("\xe2\x82"), "\xEF\xBF\xBD\xEF\xBF\xBD");                  // truncated sequence
   EXPECT_EQ(xml_escape("<a & 'b'>\t\"c\"\x02"), "&lt;a &amp; &apos;b&apos;&gt;\t&quot;c&quot;\xEF\xBF\xBD");
+  // One line, every control character visible: C0 (newline, ESC), DEL and C1 (U+009B, a one-byte CSI).
+  EXPECT_EQ(one_line("caf\xc3\xa9 ok"), "caf\xc3\xa9 ok");
+  EXPECT_EQ(one_line("a\nb\x1b[2J\x7f\xc2\x9b\t"), "a\\x0ab\\x1b[2J\\x7f\\x9b\\x09");
+  EXPECT_EQ(one_line("\xff"), "\xEF\xBF\xBD");
   EXPECT_EQ(format_points(3.0), "3");
   EXPECT_EQ(format_points(2.5), "2.5");
 }

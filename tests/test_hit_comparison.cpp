@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace twinray::crosscheck {
 namespace {
 
@@ -65,6 +67,24 @@ TEST(HitComparison, IdenticalWhenSamePrimitiveAndCloseT) {
   EXPECT_EQ(c.identical, 2u);
   EXPECT_EQ(c.genuine + c.edge + c.tie, 0u);
   EXPECT_NEAR(c.max_rel_t_diff, 3e-7, 1e-7);
+}
+
+// A hit reported at t = +inf (a "no hit yet" value left in place) is nowhere: the relative t tolerance must
+// not let it agree with the real crossing (1e-4 * inf is inf), nor make it look like the end of the interval.
+TEST(HitComparison, InfiniteTNeverAgreesWithAFiniteOne) {
+  const SceneGeometry g = square_scene();
+  const GeometryIndex index(g);
+  // Oblique, so that every coordinate of the point at t = +inf is infinite (and its tolerance with it).
+  Ray ray = down_at(0.6f, 0.1f);
+  ray.dir = {0.1f, 0.1f, -1.0f};
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_FALSE(t_agrees(index, ray, inf, 1.0f));
+  EXPECT_FALSE(t_agrees(index, ray, 1.0f, inf));
+  EXPECT_FALSE(hit_is_ambiguous(index, ray, triangle_hit(0, 0, inf, 0.5f, 0.2f)));
+  const PairComparison c =
+      run(index, {{ray, triangle_hit(0, 0, inf, 0.5f, 0.2f), triangle_hit(0, 0, 1.0f, 0.5f, 0.2f)}});
+  EXPECT_EQ(c.identical, 0u);
+  EXPECT_EQ(c.genuine, 1u);
 }
 
 TEST(HitComparison, NeighbourAcrossSharedEdgeIsEdge) {

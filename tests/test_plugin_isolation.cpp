@@ -379,6 +379,19 @@ TEST(PluginIsolation, CrashInBuildIsReportedWithStageBuild) {
   EXPECT_FALSE(f->ray.has_value());
 }
 
+// Closing every descriptor (as daemonising code does) takes the worker's lifeline and shared memory with it;
+// the sandbox refuses those two, so the verdict is one deterministic sandbox failure naming close, not the
+// worker ending at some later moment as if twinray had gone.
+TEST(PluginIsolation, ClosingTheWorkersDescriptorsIsStoppedBySeccomp) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_CLOSE_FDS_PLUGIN, quick_limits());
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->build(isolation_scene()); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash);
+  EXPECT_EQ(f->cause, "sandbox");
+  EXPECT_EQ(f->syscall, "close");
+  EXPECT_EQ(f->stage, "build");
+}
+
 // While loading and building, files may be read (the loader needs to), but not created: the first seccomp
 // phase stops an open for writing whatever the path.
 TEST(PluginIsolation, CreatingAFileInBuildIsStoppedBySeccomp) {

@@ -194,7 +194,7 @@ class IsolatedPluginBackend::Impl {
   // Kills the worker and waits until it is reaped and its output drained, so the failure carries all of it.
   void end_worker();
   [[noreturn]] void fail(PluginFailureDetails details, int channel);
-  [[noreturn]] void fail_timeout(const Lease& lease, Stage stage, bool deadline_passed,
+  [[noreturn]] void fail_timeout(const Lease& lease, Stage stage, bool deadline_passed, double call_seconds,
                                  std::chrono::duration<double> per_call);
   [[noreturn]] void fail_from_status(const Lease& lease, Stage stage);
   [[noreturn]] void fail_bad_hit(const Lease& lease, Stage stage, std::size_t request_index, const twinray_hit& h);
@@ -281,6 +281,7 @@ void IsolatedPluginBackend::Impl::wait_for_startup() {
       d.kind = PluginFailureKind::Timeout;
       d.cause = "timeout";
       d.stage = "load";
+      d.deadline_passed = deadline_first;
       d.detail = deadline_first ? std::string("the deadline passed")
                                 : fmt::format("loading and create() took longer than {} s", limits_.build_seconds);
       fail(d, -1);
@@ -389,7 +390,9 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
     auto limit = std::min(progress_at + per_call_ticks, request_limit);
     const bool deadline_first = limits_.deadline && *limits_.deadline < limit;
     if (deadline_first) limit = *limits_.deadline;
-    if (now >= limit) fail_timeout(lease, lease.slot().context.stage, deadline_first, per_call);
+    if (now >= limit)
+      fail_timeout(lease, lease.slot().context.stage, deadline_first, std::chrono::duration<double>(now - progress_at).count(),
+                   per_call);
     c.parent_sleeping.store(1, std::memory_order_seq_cst);
     if (c.response.load(std::memory_order_seq_cst) == seen && !ended_.load()) pw::futex_wait(&c.response, seen, limit - now);
     c.parent_sleeping.store(0, std::memory_order_relaxed);
@@ -473,7 +476,7 @@ void IsolatedPluginBackend::Impl::attribute_ray(const RequestContext& context, s
 }
 
 void IsolatedPluginBackend::Impl::fail_timeout(const Lease& lease, Stage stage, bool deadline_passed,
-                                               std::chrono::duration<double> per_call) {
+                                               double call_seconds, std::chrono::duration<double> per_call) {
   PluginFailureDetails d = base_details();
   d.kind = PluginFailureKind::Timeout;
   d.cause = "timeout";
@@ -482,6 +485,8 @@ void IsolatedPluginBackend::Impl::fail_timeout(const Lease& lease, Stage stage, 
     std::lock_guard lock(lease.slot().mutex);
     attribute_ray(lease.slot().context, lease.channel().current.load(), d);
   }
+  d.deadline_passed = deadline_passed;
+  d.call_seconds = call_seconds;
   d.detail = deadline_passed ? std::string("the deadline passed")
                              : fmt::format("one call took longer than {} s", per_call.count());
   fail(d, static_cast<int>(lease.index()));

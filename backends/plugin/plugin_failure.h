@@ -43,6 +43,13 @@ struct PluginFailureDetails {
   std::string syscall;      // cause "sandbox": the system call the plugin attempted, by name (e.g. "openat")
   std::optional<std::size_t> ray_index;  // index into the span the caller passed (0 for single-ray calls)
   std::optional<Ray> ray;                // the exact ray that was being traced
+  // cause "timeout": the caller's deadline for all work passed (PluginLimits::deadline), rather than one call
+  // running over its own limit. The ray in flight then only happened to be the last one: it does not hang.
+  bool deadline_passed = false;
+  // cause "timeout": how long the call in flight (the ray above) had at least been running when the time ran
+  // out, in seconds (from when twinray first saw the worker on that ray; 0 when not measured). Past the
+  // deadline, a call that had only just begun is not the one that hangs.
+  double call_seconds = 0.0;
   std::string output;       // the worker's captured stdout + stderr, truncated to PluginLimits::output_bytes
   // For the message: which plugin ("plugin:NAME (PATH)", or the path before the name is known) and what else
   // is worth saying (the exception's what(), the limit that was exceeded, ...).

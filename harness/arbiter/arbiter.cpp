@@ -186,9 +186,14 @@ Ruling Arbiter::rule_closest(const Ray& ray, const Hit& answer, const BackendTra
       grazing = x->sphere && x->near_boundary && answer.t >= x->graze_lo && answer.t <= x->graze_hi;
       if (!grazing)
         return wrong(r, Reason::TOff,
-                     fmt::format("{} is crossed at t={:.9g} (exact), answer t={:.9g}: off by {:.3g} relative, tolerance {:.3g}",
-                                 describe_primitive(*x), x->t_exact, answer.t, r.t_rel_error,
-                                 tol / std::fmax(std::fabs(x->t_exact), 1e-300)));
+                     x->t_exact != 0.0
+                         ? fmt::format("{} is crossed at t={:.9g} (exact), answer t={:.9g}: off by {:.3g} relative, "
+                                       "tolerance {:.3g}",
+                                       describe_primitive(*x), x->t_exact, answer.t, r.t_rel_error,
+                                       tol / std::fabs(x->t_exact))
+                         // At t = 0 a relative figure means nothing (it printed a tolerance of 1e+296).
+                         : fmt::format("{} is crossed at t=0 (exact), answer t={:.9g}: off by {:.3g}, tolerance {:.3g}",
+                                       describe_primitive(*x), answer.t, std::fabs(answer.t), tol));
     }
   } else if (x->sphere) {
     grazing = x->near_boundary && answer.t >= x->graze_lo && answer.t <= x->graze_hi;

@@ -35,8 +35,8 @@
 //
 // A right answer that differs from the exact one is reported with the reason that made it right: edge,
 // tie (equal t within tolerance, or a tie broken either way by a backend that does not claim ties) or
-// interval-end. u, v and the normal are not judged (t and the primitive decide what a renderer sees; u, v
-// of a sliver are ill-conditioned).
+// interval-end. u, v and the normal are not judged here (the arbiter rules what is hit); the grader judges
+// them separately, with tolerances that grow for slivers and grazing rays (harness/crosscheck/hit_attributes.h).
 //
 // Thread-safe: every member function is const and allocates its own exact numbers.
 

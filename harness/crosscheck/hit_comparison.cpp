@@ -58,6 +58,9 @@ double distance_to_edges(const TriangleMesh& mesh, std::uint32_t prim, double u,
 }  // namespace
 
 bool t_agrees(const GeometryIndex& index, const Ray& ray, float ta, float tb) {
+  // The relative term would make an infinite t agree with everything (inf <= 1e-4 * inf): a hit reported at
+  // t = +inf is never at the same place as a finite one.
+  if (!std::isfinite(ta) || !std::isfinite(tb)) return ta == tb;
   const double dir_len = glm::length(glm::dvec3(ray.dir));
   const double tol = kRelT * std::max<double>(ta, tb) +
                      kAbsWorld * (static_cast<double>(index.diagonal()) + glm::length(glm::dvec3(ray.org))) / dir_len;
@@ -66,6 +69,8 @@ bool t_agrees(const GeometryIndex& index, const Ray& ray, float ta, float tb) {
 
 bool hit_is_ambiguous(const GeometryIndex& index, const Ray& ray, const Hit& hit) {
   if (!hit.found()) return false;
+  // A hit at t = +inf is on no boundary: its point is infinite, and so would be the tolerance around it.
+  if (!std::isfinite(hit.t)) return false;
   // At the ends of the ray's interval a hit may fall just inside for one backend and just outside for another.
   if (t_agrees(index, ray, hit.t, ray.tmin) || (std::isfinite(ray.tmax) && t_agrees(index, ray, hit.t, ray.tmax)))
     return true;

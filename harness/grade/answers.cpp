@@ -2,6 +2,7 @@
 
 #include "core/geometry/ray_text.h"
 #include "harness/arbiter/arbiter.h"
+#include "harness/crosscheck/hit_attributes.h"
 
 #include <fmt/core.h>
 
@@ -65,6 +66,15 @@ class Judge {
           });
         }
         if (wrong) record(j, i, false);
+      }
+      if (check_closest && ph.found() && (j.wrong.empty() || j.wrong.back().ray != i)) {
+        // The right t on the right primitive still renders wrong with wrong u, v or ng (hit_attributes.h).
+        const crosscheck::AttributeRuling attributes = crosscheck::rule_attributes(scene_.index(), rays_[i], ph);
+        if (!attributes.right) {
+          ++j.wrong_attributes;
+          pending_ruling_ = "; wrong attributes: " + attributes.detail;
+          record(j, i, false);
+        }
       }
       if (check_any && po != ro) {
         pending_ruling_.clear();

@@ -44,6 +44,7 @@ struct WrongAnswer {
 struct Judgement {
   std::size_t rays = 0;
   std::size_t wrong_closest = 0, wrong_any = 0;
+  std::size_t wrong_attributes = 0;  // of wrong_closest: the right hit with wrong u, v or ng (hit_attributes.h)
   std::size_t edge = 0, tie = 0;  // disagreements that are not wrong (the arbiter's reason, or the tie rule)
   std::size_t overruled = 0;      // disagreements where the arbiter ruled the plugin right and the reference wrong
   std::size_t unarbitrated = 0;   // genuine disagreements beyond the arbitration cap, counted as wrong

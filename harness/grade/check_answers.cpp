@@ -115,6 +115,7 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                {"wrong", j.wrong_total()},
                {"wrong_closest", j.wrong_closest},
                {"wrong_any", j.wrong_any},
+               {"wrong_attributes", j.wrong_attributes},
                {"edge", j.edge},
                {"tie", j.tie},
                {"overruled", j.overruled},

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 namespace twinray::grade {
 
@@ -131,6 +132,11 @@ CheckVerdict run_tree_quality_check(CheckContext& ctx) {
   const double ref_nodes = per_ray(theirs.stats.nodes_visited, rays.size());
   const double ref_prims = per_ray(theirs.stats.primitives_tested, rays.size());
   const double sah_ratio = reference > 0.0 ? reported / reference : 0.0;
+  // Every tree over at least one primitive costs at least 1 in the unit model (plugin-abi.md): its root, as an
+  // interior node (A(root) / A(root)) or as a leaf of N >= 1 primitives. A reported cost below that (or not a
+  // number) describes no tree of this scene, and must not pass a threshold as a small ratio would.
+  const bool has_primitives = ctx.scene.geometry().triangle_count() + ctx.scene.geometry().sphere_count() > 0;
+  const bool impossible_sah = reported != 0.0 && has_primitives && !(reported >= 1.0 && std::isfinite(reported));
 
   CheckVerdict v;
   v.scored = ctx.spec.thresholds.any();
@@ -146,7 +152,10 @@ CheckVerdict run_tree_quality_check(CheckContext& ctx) {
   // Messages built with fmt: GCC 12 reports a bogus -Warray-bounds for a string literal pushed into a vector.
   std::vector<std::string> failed;
   const Thresholds& t = ctx.spec.thresholds;
-  if (t.max_sah_ratio && !(reported > 0.0))
+  if (t.max_sah_ratio && impossible_sah)
+    failed.push_back(fmt::format("the plugin reports an SAH cost of {}, which no tree of this scene has (the root alone "
+                                 "costs 1)", reported));
+  else if (t.max_sah_ratio && !(reported > 0.0))
     failed.push_back(fmt::format("the plugin reports no SAH cost ({})", "twinray_build_stats::sah_cost"));
   else
     require(t.max_sah_ratio, true, sah_ratio, "SAH cost ratio", failed);
@@ -157,7 +166,9 @@ CheckVerdict run_tree_quality_check(CheckContext& ctx) {
     require(t.max_primitives_per_ray_ratio, true, ref_prims > 0.0 ? prims / ref_prims : 0.0, "primitives per ray ratio", failed);
   }
   v.passed = failed.empty();
-  std::string figures = reported > 0.0 ? fmt::format("SAH cost {:.4g} against the reference's {:.4g} ({:.2f}x)", reported,
+  std::string figures = impossible_sah ? fmt::format("an impossible SAH cost of {} reported (the reference's is {:.4g})",
+                                                    reported, reference)
+                       : reported > 0.0 ? fmt::format("SAH cost {:.4g} against the reference's {:.4g} ({:.2f}x)", reported,
                                                      reference, sah_ratio)
                                        : fmt::format("no SAH cost reported (the reference's is {:.4g})", reference);
   if (counted)

@@ -7,6 +7,7 @@
 #include "harness/grade/grade_scene.h"
 #include "harness/grade/plugin_launcher.h"
 #include "harness/grade/suite.h"
+#include "harness/grade/text_safety.h"
 
 #include <fmt/core.h>
 
@@ -57,15 +58,19 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
       images.push_back({png, std::move(*v.image)});
     }
     r.figures = std::move(v.figures);
+    r.detail = one_line(r.detail);  // a detail may quote the plugin's own words (its hit's ids, its message)
   } catch (const InputError&) {
     throw;
   } catch (const std::logic_error&) {
     throw;  // a bad --check name or a grader bug is never the plugin's fault
   } catch (...) {
-    const FailureReport f = classify_failure(std::current_exception());
+    const FailureReport f = classify_failure(std::current_exception(), ctx.spec.ray_time_limit_seconds);
     r.outcome = f.outcome;
-    r.detail = f.detail;
-    r.reproduce = f.ray ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    r.detail = one_line(f.detail);  // the plugin's build error message or exception text, as one safe line
+    // One ray replays a crash or hang only when it happened to that ray alone: under the thread-safety check's
+    // concurrent calls, a crash is the race's, and tracing the ray it hit answers normally.
+    const bool concurrent = ctx.spec.category == Category::ThreadSafety;
+    r.reproduce = f.ray && !concurrent ? ctx.trace_command(*f.ray) : ctx.grade_command();
     if (!f.output.empty()) r.figures["plugin_output"] = f.output;
   }
 }
@@ -96,7 +101,7 @@ Scorecard run_grade(const GradeSettings& settings) {
 
   Scorecard card;
   card.plugin = plugin.path().string();
-  card.plugin_name = plugin.name();
+  card.plugin_name = one_line(plugin.name());
   card.claims = plugin.traits();
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();

@@ -53,6 +53,7 @@ struct FailureReport {
 
 // What the exception a plugin call threw means for the check. Rethrows what is not a plugin failure (bad
 // input, a grader bug) so it is never mistaken for the student's fault.
-FailureReport classify_failure(const std::exception_ptr& failure);
+// `ray_seconds` is the check's limit for one ray (ray_time_limit).
+FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds);
 
 }  // namespace twinray::grade

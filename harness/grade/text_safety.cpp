@@ -74,4 +74,25 @@ std::string xml_escape(std::string_view text) {
   return out;
 }
 
+std::string one_line(std::string_view text) {
+  const std::string utf8 = valid_utf8(text);
+  std::string out;
+  out.reserve(utf8.size());
+  for (std::size_t i = 0; i < utf8.size(); ++i) {
+    const auto c = static_cast<std::uint8_t>(utf8[i]);
+    // C1 controls are U+0080..U+009F: 0xC2 followed by 0x80..0x9F in UTF-8.
+    const bool c1 = c == 0xC2 && i + 1 < utf8.size() && static_cast<std::uint8_t>(utf8[i + 1]) <= 0x9F;
+    if (c < 0x20 || c == 0x7F || c1) {
+      const unsigned code = c1 ? static_cast<std::uint8_t>(utf8[++i]) : c;
+      constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[code >> 4];
+      out += kHex[code & 0xF];
+    } else {
+      out += utf8[i];
+    }
+  }
+  return out;
+}
+
 }  // namespace twinray::grade

@@ -15,4 +15,11 @@ std::string valid_utf8(std::string_view text);
 // below 0x20 except tab, newline and carriage return) replaced by U+FFFD.
 std::string xml_escape(std::string_view text);
 
+// One line of plain text for a scorecard field (a check's detail, the plugin's name) that may carry a
+// plugin's words (a build error message, an exception's what(), the name in its table): valid UTF-8, and every
+// control character (C0, DEL and C1, among them newlines and the escape that starts a terminal's colour and
+// cursor sequences) written as a visible \xNN, so what a plugin says can neither break the line nor draw a
+// fake result on the grader's terminal.
+std::string one_line(std::string_view text);
+
 }  // namespace twinray::grade

@@ -18,6 +18,10 @@
  *   CRASH_AT_100  like SEGV, but its trigger is the 100th query (for the command-line tests, whose rays
  *                 have no zero component)
  *   CREATE_CRASH, CREATE_LOOP, DESTROY_CRASH   crash or loop in create(), crash in destroy()
+ *   CLOSE_FDS     closes every descriptor from 0 to 63 in build, as code that "daemonises" does: among them the
+ *                 worker's shared memory (3) and lifeline (4), which the sandbox refuses to let go
+ *   BUILD_ESCAPES is named, and fails its build with a message, full of terminal escapes, newlines, a fake
+ *                 scorecard line and invalid UTF-8
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -90,6 +94,16 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   (void)capacity;
 #ifdef TWINRAY_HOSTILE_BUILD_CRASH
   crash();
+#endif
+#ifdef TWINRAY_HOSTILE_CLOSE_FDS
+  {
+    int fd;
+    for (fd = 0; fd < 64; ++fd) close(fd);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_BUILD_ESCAPES
+  write_message(error, capacity, "\033[2J\033[32mpass\n\rpass        9/9  closest-hit   everything\xff\xfe\x9b");
+  return TWINRAY_ERROR;
 #endif
 #ifdef TWINRAY_HOSTILE_BUILD_READ
   {
@@ -236,8 +250,13 @@ static int hostile_occluded1(const void* self, const twinray_ray* ray, twinray_q
   return 0;
 }
 
+#ifdef TWINRAY_HOSTILE_BUILD_ESCAPES
+#define HOSTILE_NAME "hostile\n\033[1mpass\xff"
+#else
+#define HOSTILE_NAME "hostile"
+#endif
 static const twinray_plugin_v1 hostile_table = {
-    TWINRAY_PLUGIN_ABI_VERSION, "hostile", 0u, hostile_create, hostile_destroy, hostile_build,
+    TWINRAY_PLUGIN_ABI_VERSION, HOSTILE_NAME, 0u, hostile_create, hostile_destroy, hostile_build,
     hostile_intersect1,         hostile_occluded1, NULL, NULL, NULL,
 };
 

@@ -15,6 +15,13 @@
 //   9 ANYHIT_TMAX      any-hit ignores tmax
 //  10 OPENS_FILES      not a bug but a cheat: while answering, it reads a file and writes another (the
 //                      grader's sandbox must stop it; a file it manages to write proves it escaped)
+//  11 SWAPPED_UV       the right triangle at the right t, with u and v swapped (the hit point is elsewhere)
+//  12 FLIPPED_NORMAL   ng = cross(p2 - p0, p1 - p0): the back of every surface
+//  13 INFINITE_T       t = +inf on rays without an end, whatever the hit (a "no hit yet" value left in place)
+//  14 TINY_SAH         a correct tree whose reported SAH cost is 1e-6 (no tree of a non-empty scene costs
+//                      less than 1, its root)
+//  15 CONCURRENT_CRASH  crashes when two closest-hit calls are inside it at once (what a race on a shared
+//                      buffer does): only concurrent calls show it, and no single ray replays it
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -25,6 +32,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -533,9 +541,22 @@ void try_to_cheat() {
 }
 #endif
 
+#if BUG(15)
+std::atomic<int> g_inside{0};
+#endif
+
 int scotty_intersect1(const void* self, const twinray_ray* r, twinray_hit* hit, twinray_query_stats* stats) {
 #if BUG(10)
   try_to_cheat();
+#endif
+#if BUG(15)
+  if (g_inside.fetch_add(1) > 0) {
+    volatile int* volatile nowhere = nullptr;
+    *nowhere = 1;
+  }
+  struct Leave {
+    ~Leave() { g_inside.fetch_sub(1); }
+  } leave;
 #endif
   const Ray ray = to_ray(r);
   const Trace t = static_cast<const BVH*>(self)->hit(ray, *stats);
@@ -546,6 +567,16 @@ int scotty_intersect1(const void* self, const twinray_ray* r, twinray_hit* hit, 
   hit->geom_id = t.geom;
   hit->prim_id = t.prim;
   static_cast<const Primitive*>(t.primitive)->attributes(ray, t, *hit);
+#if BUG(11)
+  if (static_cast<const Primitive*>(t.primitive)->mesh) std::swap(hit->u, hit->v);
+#endif
+#if BUG(12)
+  if (static_cast<const Primitive*>(t.primitive)->mesh)
+    for (float& n : hit->ng) n = -n;
+#endif
+#if BUG(13)
+  if (std::isinf(r->tmax)) hit->t = INFINITY;
+#endif
   return 1;
 }
 
@@ -556,7 +587,12 @@ int scotty_occluded1(const void* self, const twinray_ray* r, twinray_query_stats
   return static_cast<const BVH*>(self)->any_hit(to_ray(r), *stats) ? 1 : 0;
 }
 
-void scotty_build_stats(const void* self, twinray_build_stats* stats) { static_cast<const BVH*>(self)->stats(*stats); }
+void scotty_build_stats(const void* self, twinray_build_stats* stats) {
+  static_cast<const BVH*>(self)->stats(*stats);
+#if BUG(14)
+  stats->sah_cost = 1e-6;
+#endif
+}
 
 #if SCOTTY_BUG == 0
 #define SCOTTY_NAME "scotty-bvh"

@@ -1,6 +1,7 @@
 #include "backends/plugin/worker/seccomp_filter.h"
 
 #include "backends/plugin/sanitizer_build.h"
+#include "backends/plugin/worker_protocol.h"  // kControlFd, kLifelineFd
 
 #include <sys/ioctl.h>  // TCGETS, TIOCGWINSZ
 #include <fcntl.h>
@@ -104,14 +105,21 @@ void allow_running(Builder& b) {
   ALLOW(writev);
   ALLOW(pread64);
   ALLOW(lseek);
-  ALLOW(close);
+  // Closing or replacing (dup2, dup3) the worker's own descriptors 3 (the shared memory) and 4 (the lifeline)
+  // is refused: with 4 gone, the worker would end as if twinray had, at a moment that depends on its threads'
+  // timing, and be reported as having called exit(0) somewhere else. Refused, it is one deterministic sandbox
+  // failure naming the call. Everything else a plugin may close (its own files, even stdout and stderr).
+  b.allow_if(SCMP_SYS(close), "close", arg(0, SCMP_CMP_LT, kControlFd));
+  b.allow_if(SCMP_SYS(close), "close", arg(0, SCMP_CMP_GT, kLifelineFd));
   ALLOW(fstat);
   // glibc's fstat is newfstatat(fd, "", AT_EMPTY_PATH); with a path it would tell whether files exist.
   ALLOW_IF(newfstatat, arg(3, SCMP_CMP_MASKED_EQ, AT_EMPTY_PATH, AT_EMPTY_PATH));
   ALLOW(fcntl);
   ALLOW(dup);
-  ALLOW(dup2);
-  ALLOW(dup3);
+  b.allow_if(SCMP_SYS(dup2), "dup2", arg(1, SCMP_CMP_LT, kControlFd));
+  b.allow_if(SCMP_SYS(dup2), "dup2", arg(1, SCMP_CMP_GT, kLifelineFd));
+  b.allow_if(SCMP_SYS(dup3), "dup3", arg(1, SCMP_CMP_LT, kControlFd));
+  b.allow_if(SCMP_SYS(dup3), "dup3", arg(1, SCMP_CMP_GT, kLifelineFd));
   ALLOW(poll);
   ALLOW(ppoll);
   // isatty() (stdio decides on buffering) and the terminal's width: harmless queries, on a pipe they fail.
