@@ -216,10 +216,13 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
   if constexpr (kDense) g.mark_used(map.bins);
 }
 
-// Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily.
+// Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
+// size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
+// time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).
+constexpr std::size_t kDenseFrom = 32;
+
 inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
                       std::uint32_t second_kind_begin, bool second_kind_present) {
-  constexpr std::size_t kDenseFrom = 32;
   const bool dense = e - b >= kDenseFrom;
   if (!second_kind_present) {
     if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
@@ -228,6 +231,87 @@ inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, 
     if (dense) bin_range<true, true>(g, refs, b, e, map, second_kind_begin);
     else bin_range<false, true>(g, refs, b, e, map, second_kind_begin);
   }
+}
+
+// The best plane of a cleared grid (every bin initialised, see BinGrid::clear) on the usable axes. The
+// three axes are swept at once, one SSE lane each: a bin's three boxes are transposed so that a vector
+// holds one coordinate of the three axes' bins. The costs are computed lane for lane with the operations,
+// in the order, of the scalar sweep below (half_area, leaf_tests), so they are bit-identical to it, and
+// the winner is the first minimum in (axis, plane) order, as the scalar sweep's strict < finds it. Every
+// plane is a candidate: a plane after an empty bin has the sides, hence the cost, of the plane before it
+// and loses the tie; a plane with an empty side costs inf * 0 = NaN, which never compares less. Worth it
+// for large ranges, whose bins are mostly occupied; small ranges sweep their few occupied bins instead.
+Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable) {
+  struct Soa {
+    __m128 lo[3], hi[3];  // per coordinate, one lane per axis
+  };
+  Soa soa[kMaxBins];
+  __m128 right_cost[kMaxBins];
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  for (int k = 0; k < bins; ++k) {
+    __m128 l0 = g.lo[0][k], l1 = g.lo[1][k], l2 = g.lo[2][k], l3 = _mm_setzero_ps();
+    __m128 h0 = g.hi[0][k], h1 = g.hi[1][k], h2 = g.hi[2][k], h3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(l0, l1, l2, l3);
+    _MM_TRANSPOSE4_PS(h0, h1, h2, h3);
+    soa[k] = {{l0, l1, l2}, {h0, h1, h2}};
+  }
+  const auto counts = [&](const std::uint32_t (&c)[3][kMaxBins], int k) {
+    return _mm_setr_epi32(static_cast<int>(c[0][k]), static_cast<int>(c[1][k]), static_cast<int>(c[2][k]), 0);
+  };
+  // Bounds3::half_area(), (e.x e.y + e.y e.z) + e.z e.x, per lane.
+  const auto half_area = [](const __m128* lo, const __m128* hi) {
+    const __m128 ex = _mm_sub_ps(hi[0], lo[0]), ey = _mm_sub_ps(hi[1], lo[1]), ez = _mm_sub_ps(hi[2], lo[2]);
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)), _mm_mul_ps(ez, ex));
+  };
+  // leaf_tests(count, second) per lane: (count - second + 3) / 4 + second, exact in float.
+  static_assert(kTriangleBlockLanes == 4, "blocks of four: the division is a shift");
+  const auto tests = [](__m128i count, __m128i second) {
+    const __m128i triangles = _mm_sub_epi32(count, second);
+    return _mm_cvtepi32_ps(_mm_add_epi32(_mm_srli_epi32(_mm_add_epi32(triangles, _mm_set1_epi32(3)), 2), second));
+  };
+
+  __m128 lo[3] = {inf, inf, inf}, hi[3] = {minus_inf, minus_inf, minus_inf};
+  __m128i count = _mm_setzero_si128(), second = _mm_setzero_si128();
+  for (int k = bins - 1; k > 0; --k) {  // right_cost[k]: bins k.. on the right
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = extend_lo(lo[c], soa[k].lo[c]);
+      hi[c] = extend_hi(hi[c], soa[k].hi[c]);
+    }
+    count = _mm_add_epi32(count, counts(g.count, k));
+    second = _mm_add_epi32(second, counts(g.second_kind, k));
+    right_cost[k] = _mm_mul_ps(half_area(lo, hi), tests(count, second));
+  }
+
+  const __m128 usable_mask = _mm_castsi128_ps(_mm_setr_epi32(usable[0] ? -1 : 0, usable[1] ? -1 : 0, usable[2] ? -1 : 0, 0));
+  __m128 best_cost = inf;
+  __m128i best_plane = _mm_setzero_si128();
+  for (int c = 0; c < 3; ++c) {
+    lo[c] = inf;
+    hi[c] = minus_inf;
+  }
+  count = _mm_setzero_si128();
+  second = _mm_setzero_si128();
+  for (int k = 0; k + 1 < bins; ++k) {  // plane k + 1: bins ..k on the left
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = extend_lo(lo[c], soa[k].lo[c]);
+      hi[c] = extend_hi(hi[c], soa[k].hi[c]);
+    }
+    count = _mm_add_epi32(count, counts(g.count, k));
+    second = _mm_add_epi32(second, counts(g.second_kind, k));
+    const __m128 cost = _mm_add_ps(_mm_mul_ps(half_area(lo, hi), tests(count, second)), right_cost[k + 1]);
+    const __m128 better = _mm_and_ps(_mm_cmplt_ps(cost, best_cost), usable_mask);
+    best_cost = _mm_or_ps(_mm_and_ps(better, cost), _mm_andnot_ps(better, best_cost));
+    best_plane = _mm_or_si128(_mm_and_si128(_mm_castps_si128(better), _mm_set1_epi32(k + 1)),
+                              _mm_andnot_si128(_mm_castps_si128(better), best_plane));
+  }
+  alignas(16) float costs[4];
+  alignas(16) std::int32_t planes[4];
+  _mm_store_ps(costs, best_cost);
+  _mm_store_si128(reinterpret_cast<__m128i*>(planes), best_plane);
+  Split best;
+  for (int axis = 0; axis < 3; ++axis)
+    if (costs[axis] < best.cost) best = {Split::Kind::Bin, axis, planes[axis], costs[axis]};
+  return best;
 }
 
 class Builder {
@@ -317,13 +401,25 @@ class Builder {
     if (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth || centroids_coincide)
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
 
+    const float area = box.half_area();
+    const float leaf_cost = o_.intersection_cost * leaf_tests(static_cast<std::uint32_t>(n), second_kind);
+    // A node that may be a leaf and whose leaf costs no more than one interior step stays a leaf whenever a
+    // binned split exists: the split's cost below is C_trav plus a non-negative term, never less than the
+    // leaf's. Which split is best does not matter then, only whether there is one, so the sweep is skipped.
+    // These are the most common calls (every leaf of 2 or more primitives is one: bvh8's binary tree
+    // stops at 3 with C_trav = C_isect, bvh's at 8 with C_trav = 3 C_isect). The bound on the area keeps
+    // every plane's cost finite, as the sweep needs it to be for "a plane exists" to mean "a split exists".
+    constexpr float kFiniteCostArea = 1e35f;  // x 2 sides x at most 255 tests, far below FLT_MAX
+    if (fits_leaf && leaf_cost <= o_.traversal_cost && area <= kFiniteCostArea) {
+      if (has_binned_plane(begin, end, centroids)) return {};
+      return {Split::Kind::ObjectMedian, centroids.largest_axis()};
+    }
+
     Split best = best_binned_split(begin, end, centroids, second_kind);
     if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     // Compare with stopping here: both costs per unit of this node's area.
-    const float area = box.half_area();
     const float split_cost = area > 0.0f ? o_.traversal_cost + o_.intersection_cost * best.cost / area : INFINITY;
-    const float leaf_cost = o_.intersection_cost * leaf_tests(static_cast<std::uint32_t>(n), second_kind);
     if (fits_leaf && leaf_cost <= split_cost) return {};
     return best;
   }
@@ -334,20 +430,43 @@ class Builder {
     return std::clamp(b, 0, bins - 1);
   }
 
-  // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
-  // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
-  // as in leaf_tests.
-  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids, std::uint32_t second_kind) const {
+  // The mapping of centroids to bins on every axis, and which axes are usable: an extent of zero or one too
+  // small for a finite scale cannot be binned.
+  BinMapping bin_mapping(const Bounds3& centroids, std::array<bool, 3>& usable) const {
     const int bins = o_.bins;
     std::array<float, 3> scale{};
-    std::array<bool, 3> usable{};
     for (int axis = 0; axis < 3; ++axis) {
       const float extent = centroids.hi[axis] - centroids.lo[axis];
       scale[static_cast<std::size_t>(axis)] = static_cast<float>(bins) / extent;
       usable[static_cast<std::size_t>(axis)] = extent > 0.0f && std::isfinite(scale[static_cast<std::size_t>(axis)]);
     }
-    const BinMapping map{_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
-                         _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
+    return {_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
+            _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
+  }
+
+  // Whether best_binned_split() would find a plane: on some usable axis the primitives fall in at least
+  // two bins (then the first of them has a plane after it, with both sides non-empty).
+  bool has_binned_plane(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
+    std::array<bool, 3> usable{};
+    const BinMapping map = bin_mapping(centroids, usable);
+    alignas(16) std::int32_t first[4], k[4];
+    __m128 lo, hi;
+    map.bins_of(refs_[begin], lo, hi, first);
+    for (std::size_t i = begin + 1; i < end; ++i) {
+      map.bins_of(refs_[i], lo, hi, k);
+      for (std::size_t axis = 0; axis < 3; ++axis)
+        if (usable[axis] && k[axis] != first[axis]) return true;
+    }
+    return false;
+  }
+
+  // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
+  // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
+  // as in leaf_tests.
+  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids, std::uint32_t second_kind) const {
+    std::array<bool, 3> usable{};
+    const BinMapping map = bin_mapping(centroids, usable);
+    const int bins = o_.bins;
     const std::span<const PrimRef> refs(refs_);
     BinGrid grid;
     if (!o_.parallel || end - begin < kParallelRangeGrain) {
@@ -359,6 +478,8 @@ class Builder {
         return g;
       }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
     }
+
+    if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable);
 
     Split best;
     for (int axis = 0; axis < 3; ++axis) {
