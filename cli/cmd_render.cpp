@@ -89,7 +89,7 @@ int run_render(const RenderCommandOptions& opt) {
   else if (opt.env_sampling == "uniform") ro.env_importance_sampling = false;
   else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
   if (const std::optional<SamplerKind> k = parse_sampler_kind(opt.sampler)) ro.sampler = *k;
-  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol, independent)");
+  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol4d, sobol, independent)");
   if (const std::optional<CausticsMode> m = parse_caustics_mode(opt.caustics)) ro.caustics = *m;
   else return report_bad_input("render", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
   if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
