@@ -29,7 +29,7 @@ struct RenderCommandOptions {
   std::string integrator = "path";
   std::string strategy = "mis";
   std::string env_sampling = "importance";
-  std::string sampler = "sobol";
+  std::string sampler = "sobol4d";
   std::string caustics = "auto";
   std::optional<int> spp;
   std::optional<double> time_seconds;
@@ -281,7 +281,8 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
                                                  "(default: the scene's render.max_depth)");
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
-  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol (Owen-scrambled, default) or independent")
+  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol4d (Owen-scrambled Sobol, pairs of 2D draws as 4D points; default), "
+                  "sobol (Owen-scrambled Sobol, every 2D draw on its own) or independent (PCG32)")
       ->capture_default_str();
   cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->capture_default_str();
   cmd->add_option("-o,--output", opt->output, "Linear float EXR (default SCENE-STEM.exr when no --png is given)");
