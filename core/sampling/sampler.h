@@ -17,7 +17,7 @@
 //    sample): each direction a path takes is stratified jointly with the light sample where it lands, which
 //    is the four-dimensional integrand of one bounce of indirect light. 1D draws (the roulette) are padded
 //    as with Sobol and do not break the pairing. Measured on the Cornell box (docs/rendering.md#sampler):
-//    the one-bounce noise drops by 4%, the whole image's by 2 to 3%, at no cost in time.
+//    the one-bounce noise drops by 5%, the whole image's by 2 to 3%, at no cost in time.
 // The Sobol seeds are a hash of (seed, pixel, dimension), so the pixel's samples stratify every pair of
 // values the path tracer draws, and the image still depends only on (seed, pixel, sample): not on the
 // thread count, the tile order, or on --spp versus --time.

@@ -33,8 +33,9 @@ inline std::uint32_t dimension0(std::uint32_t index) { return reverse_bits(index
 // Dimensions 1 to 3 with Joe and Kuo's direction numbers (file new-joe-kuo-6.21201 of S. Joe and F. Y. Kuo,
 // "Constructing Sobol sequences with better two-dimensional projections", SIAM J. Sci. Comput. 30, 2008):
 // the degree s of the primitive polynomial, its inner coefficients a (bit s - 1 - j is the coefficient of
-// x^(s - j)) and the initial odd integers m_1..m_s. Dimensions 0 to 3 form a (3,4)-sequence; the pair (0, 1)
-// is a (0,2)-sequence, the pair (2, 3) a (1,2)-sequence.
+// x^(s - j)) and the initial odd integers m_1..m_s. Dimensions 0 to 3 form a (3,4)-sequence (Sobol's bound:
+// the sum of degree - 1); the pair (0, 1) is a (0,2)-sequence, the pair (2, 3) is less even: its first 2^m
+// points are (t,m,2)-nets with t = 1 for m = 5 to 10 (t = 2 at m = 3, 11, 12).
 struct SobolPolynomial {
   int degree;
   std::uint32_t inner_coefficients;
