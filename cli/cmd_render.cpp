@@ -29,7 +29,7 @@ struct RenderCommandOptions {
   std::string integrator = "path";
   std::string strategy = "mis";
   std::string env_sampling = "importance";
-  std::string sampler = "sobol";
+  std::string sampler = "sobol4d";
   std::string caustics = "auto";
   std::optional<int> spp;
   std::optional<double> time_seconds;
@@ -89,7 +89,7 @@ int run_render(const RenderCommandOptions& opt) {
   else if (opt.env_sampling == "uniform") ro.env_importance_sampling = false;
   else return report_bad_input("render", "unknown --env-sampling '" + opt.env_sampling + "' (choose from importance, uniform)");
   if (const std::optional<SamplerKind> k = parse_sampler_kind(opt.sampler)) ro.sampler = *k;
-  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol, independent)");
+  else return report_bad_input("render", "unknown --sampler '" + opt.sampler + "' (choose from sobol4d, sobol, independent)");
   if (const std::optional<CausticsMode> m = parse_caustics_mode(opt.caustics)) ro.caustics = *m;
   else return report_bad_input("render", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
   if (opt.spp && opt.time_seconds) return report_bad_input("render", "--spp and --time are exclusive");
@@ -281,7 +281,8 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
                                                  "(default: the scene's render.max_depth)");
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
-  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol (Owen-scrambled, default) or independent")
+  cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol4d (Owen-scrambled Sobol, pairs of 2D draws as 4D points; default), "
+                  "sobol (Owen-scrambled Sobol, every 2D draw on its own) or independent (PCG32)")
       ->capture_default_str();
   cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->capture_default_str();
   cmd->add_option("-o,--output", opt->output, "Linear float EXR (default SCENE-STEM.exr when no --png is given)");

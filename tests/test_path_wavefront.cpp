@@ -35,6 +35,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
   const SceneContext ctx = SceneContext::make(scene, *backend, setup.environment(), setup.lights());
   const PinholeCamera camera(scene.camera);
 
+  for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d})
   for (const int max_depth : {-1, 6}) {
     IntegratorSettings settings;
     settings.max_depth = max_depth;
@@ -45,7 +46,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
     std::vector<CameraSample> batch, lone;
     for (std::size_t k = 0; k < kSamples; ++k) {
       const int x = 150 + static_cast<int>(k % 10), y = 180 + static_cast<int>((k / 10) % 10);
-      Sampler sampler(SamplerKind::Sobol, 7, static_cast<std::uint64_t>(y * camera.width() + x),
+      Sampler sampler(kind, 7, static_cast<std::uint64_t>(y * camera.width() + x),
                       static_cast<std::uint32_t>(k / 100));
       const glm::vec2 jitter = sampler.next_2d();
       const Ray ray = camera.generate_ray((static_cast<float>(x) + jitter.x) / static_cast<float>(camera.width()),
@@ -61,7 +62,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
     for (std::size_t k = 0; k < kSamples; ++k) {
       FirstHitInfo lone_first;
       const glm::vec3 L = integrator.radiance(lone[k].ray, lone[k].sampler, lone_counters, &lone_first);
-      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth;
+      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth << ", " << to_string(kind);
       EXPECT_EQ(first[k].hit, lone_first.hit);
       EXPECT_EQ(bits(first[k].normal), bits(lone_first.normal));
       EXPECT_EQ(first[k].depth, lone_first.depth);

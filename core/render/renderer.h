@@ -41,7 +41,7 @@ struct RenderOptions {
   double time_budget_seconds = 0.0;     // > 0: passes of 1 spp until the time is used (spp ignored)
   std::uint64_t seed = 0;
   AuxChannels aux;
-  SamplerKind sampler = SamplerKind::Sobol;  // core/sampling/sampler.h
+  SamplerKind sampler = SamplerKind::Sobol4d;  // core/sampling/sampler.h
   CausticsMode caustics = CausticsMode::Auto;
   int tile_size = 16;
   bool show_progress = true;            // a progress line on a terminal (core/util/progress.h)

@@ -1,6 +1,6 @@
 #pragma once
-// The first two dimensions of the Sobol sequence (a (0,2)-sequence in base 2) and hash-based Owen
-// scrambling, after Burley, "Practical Hash-based Owen Scrambling", JCGT 9(4), 2020.
+// The first four dimensions of the Sobol sequence and hash-based Owen scrambling, after Burley, "Practical
+// Hash-based Owen Scrambling", JCGT 9(4), 2020.
 //
 // Why these pieces: every prefix of 2^k points of a (0,2)-sequence puts exactly one point in each of the
 // 2^k elementary intervals of every shape (2^a x 2^b cells, a + b = k), so a pixel's samples stratify every
@@ -9,7 +9,9 @@
 // that property, makes each point uniformly distributed (so estimates stay unbiased) and removes the
 // structure that makes unscrambled sequences alias. The hash is Burley's: a Laine-Karras style permutation
 // applied to the bit-reversed value, which reverses the direction in which bits influence each other so
-// that each bit depends on the bits *above* it, as nested scrambling requires.
+// that each bit depends on the bits *above* it, as nested scrambling requires. Dimensions 2 and 3 serve the
+// 4D sampler (sampler.h): the four dimensions together stratify pairs of 2D values jointly, which the
+// (0,2)-sequence of dimensions 0 and 1 alone cannot.
 
 #include <bit>
 #include <cstdint>
@@ -28,60 +30,103 @@ inline std::uint32_t reverse_bits(std::uint32_t x) {
 // fixed-point fraction).
 inline std::uint32_t dimension0(std::uint32_t index) { return reverse_bits(index); }
 
-// Dimension 1: primitive polynomial x + 1; its direction numbers are the rows of Pascal's triangle mod 2,
-// v_0 = 2^31 and v_k = v_{k-1} xor (v_{k-1} >> 1); point i is the xor of v_k over the set bits k of i.
-// Shuffled indices (below) use all 32 bits, so the xor is taken a byte at a time from tables of the xors of
-// every byte value at each of the four byte positions (4 KiB): four loads instead of up to 32 steps.
-inline constexpr struct Dimension1Tables {
-  std::uint32_t byte[4][256];
-  constexpr Dimension1Tables() : byte() {
-    std::uint32_t v[32] = {};
-    v[0] = 0x80000000u;
-    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
-    for (int b = 0; b < 4; ++b)
-      for (int value = 0; value < 256; ++value) {
-        std::uint32_t x = 0;
-        for (int bit = 0; bit < 8; ++bit)
-          if (value & (1 << bit)) x ^= v[8 * b + bit];
-        byte[b][value] = x;
-      }
-  }
-} kDimension1{};
+// Dimensions 1 to 3 with Joe and Kuo's direction numbers (file new-joe-kuo-6.21201 of S. Joe and F. Y. Kuo,
+// "Constructing Sobol sequences with better two-dimensional projections", SIAM J. Sci. Comput. 30, 2008):
+// the degree s of the primitive polynomial, its inner coefficients a (bit s - 1 - j is the coefficient of
+// x^(s - j)) and the initial odd integers m_1..m_s. Dimensions 0 to 3 form a (3,4)-sequence (Sobol's bound:
+// the sum of degree - 1); the pair (0, 1) is a (0,2)-sequence, the pair (2, 3) is less even: its first 2^m
+// points are (t,m,2)-nets with t = 1 for m = 5 to 10 (t = 2 at m = 3, 11, 12).
+struct SobolPolynomial {
+  int degree;
+  std::uint32_t inner_coefficients;
+  std::uint32_t initial[3];
+};
+inline constexpr SobolPolynomial kSobolPolynomials[4] = {
+    {0, 0, {}},         // dimension 0: van der Corput, direction numbers 2^-(k+1)
+    {1, 0, {1}},        // x + 1: the rows of Pascal's triangle mod 2
+    {2, 1, {1, 3}},     // x^2 + x + 1
+    {3, 1, {1, 3, 1}},  // x^3 + x + 1
+};
+inline constexpr int kSobolDimensions = 4;
 
-inline std::uint32_t dimension1(std::uint32_t index) {
-  return kDimension1.byte[0][index & 0xFFu] ^ kDimension1.byte[1][(index >> 8) & 0xFFu] ^
-         kDimension1.byte[2][(index >> 16) & 0xFFu] ^ kDimension1.byte[3][index >> 24];
+// The 32 direction numbers of dimension d as 0.32 fractions: v_k = m_{k+1} / 2^(k+1) for k < s, then
+// v_k = v_{k-s} xor (v_{k-s} >> s) xor (xor over j = 1..s-1 of a_j v_{k-j}). Point i of the dimension is the
+// xor of v_k over the set bits k of i (index order, not Gray-code order).
+struct DirectionNumbers {
+  std::uint32_t v[32];
+};
+constexpr DirectionNumbers direction_numbers(int d) {
+  DirectionNumbers out{};
+  const SobolPolynomial& p = kSobolPolynomials[d];
+  for (int k = 0; k < 32; ++k) {
+    if (d == 0) {
+      out.v[k] = 0x80000000u >> k;
+    } else if (k < p.degree) {
+      out.v[k] = p.initial[k] << (31 - k);
+    } else {
+      std::uint32_t x = out.v[k - p.degree] ^ (out.v[k - p.degree] >> p.degree);
+      for (int j = 1; j < p.degree; ++j)
+        if ((p.inner_coefficients >> (p.degree - 1 - j)) & 1u) x ^= out.v[k - j];
+      out.v[k] = x;
+    }
+  }
+  return out;
 }
 
-// The same map seen through bit reversal: reverse_bits(dimension1(reverse_bits(z))). Both are linear over
-// GF(2) (xors of direction numbers), so their composition is too, and it is tabulated by the bytes of z the
-// same way. The sampler keeps its shuffled indices bit-reversed (see Sampler::next_2d): this table then
-// saves two of the bit reversals a 2D draw would otherwise make.
-inline constexpr struct ReversedDimension1Tables {
-  std::uint32_t byte[4][256];
-  constexpr ReversedDimension1Tables() : byte() {
-    std::uint32_t v[32] = {};
-    v[0] = 0x80000000u;
-    for (int k = 1; k < 32; ++k) v[k] = v[k - 1] ^ (v[k - 1] >> 1);
-    auto reverse = [](std::uint32_t x) {
-      std::uint32_t r = 0;
-      for (int bit = 0; bit < 32; ++bit) r |= ((x >> bit) & 1u) << (31 - bit);
-      return r;
-    };
-    // Bit j of z is bit 31 - j of the index, whose direction number is v[31 - j].
-    for (int b = 0; b < 4; ++b)
-      for (int value = 0; value < 256; ++value) {
-        std::uint32_t x = 0;
-        for (int bit = 0; bit < 8; ++bit)
-          if (value & (1 << bit)) x ^= reverse(v[31 - (8 * b + bit)]);
-        byte[b][value] = x;
-      }
-  }
-} kReversedDimension1{};
+// Point `index` of dimension d, one bit at a time: the definition the tables below are checked against.
+constexpr std::uint32_t sobol_point(int d, std::uint32_t index) {
+  const DirectionNumbers dn = direction_numbers(d);
+  std::uint32_t x = 0;
+  for (int k = 0; k < 32; ++k)
+    if ((index >> k) & 1u) x ^= dn.v[k];
+  return x;
+}
 
-inline std::uint32_t reversed_dimension1_of_reversed(std::uint32_t z) {
-  return kReversedDimension1.byte[0][z & 0xFFu] ^ kReversedDimension1.byte[1][(z >> 8) & 0xFFu] ^
-         kReversedDimension1.byte[2][(z >> 16) & 0xFFu] ^ kReversedDimension1.byte[3][z >> 24];
+// Shuffled indices (below) use all 32 bits, so a dimension's xor is taken a byte at a time from tables of
+// the xors of every byte value at each of the four byte positions (4 KiB a dimension): four loads instead of
+// up to 32 steps. Every dimension is linear over GF(2) (xors of direction numbers), and so is its composition
+// with bit reversal on both sides, z -> reverse_bits(dimension_d(reverse_bits(z))): the sampler keeps its
+// shuffled indices bit-reversed (see Sampler::next_2d) and reads that composition from tables built the same
+// way, which saves two bit reversals per value. `reversed` selects which of the two maps a table holds.
+struct DimensionTables {
+  std::uint32_t byte[4][256];
+};
+constexpr DimensionTables make_dimension_tables(int d, bool reversed) {
+  DimensionTables t{};
+  const DirectionNumbers dn = direction_numbers(d);
+  auto reverse = [](std::uint32_t x) {
+    std::uint32_t r = 0;
+    for (int bit = 0; bit < 32; ++bit) r |= ((x >> bit) & 1u) << (31 - bit);
+    return r;
+  };
+  for (int b = 0; b < 4; ++b)
+    for (int value = 0; value < 256; ++value) {
+      std::uint32_t x = 0;
+      for (int bit = 0; bit < 8; ++bit) {
+        if (!(value & (1 << bit))) continue;
+        // In the reversed map, bit j of z is bit 31 - j of the index, whose direction number is v[31 - j].
+        const int j = 8 * b + bit;
+        x ^= reversed ? reverse(dn.v[31 - j]) : dn.v[j];
+      }
+      t.byte[b][value] = x;
+    }
+  return t;
+}
+inline constexpr DimensionTables kDimension1 = make_dimension_tables(1, false);
+inline constexpr DimensionTables kReversedDimensions[kSobolDimensions - 1] = {
+    make_dimension_tables(1, true), make_dimension_tables(2, true), make_dimension_tables(3, true)};
+
+inline std::uint32_t lookup(const DimensionTables& t, std::uint32_t x) {
+  return t.byte[0][x & 0xFFu] ^ t.byte[1][(x >> 8) & 0xFFu] ^ t.byte[2][(x >> 16) & 0xFFu] ^ t.byte[3][x >> 24];
+}
+
+inline std::uint32_t dimension1(std::uint32_t index) { return lookup(kDimension1, index); }
+
+// reverse_bits(dimension_d(reverse_bits(z))) for d in 1..3 (for d = 0 it is reverse_bits(z)).
+template <int d>
+inline std::uint32_t reversed_dimension_of_reversed(std::uint32_t z) {
+  static_assert(d >= 1 && d < kSobolDimensions);
+  return lookup(kReversedDimensions[d - 1], z);
 }
 
 // Burley's hash of a bit-reversed value (constants from the paper): each output bit depends only on the
