@@ -22,6 +22,7 @@
  *                 worker's shared memory (3) and lifeline (4), which the sandbox refuses to let go
  *   BUILD_ESCAPES is named, and fails its build with a message, full of terminal escapes, newlines, a fake
  *                 scorecard line and invalid UTF-8
+ *   BUILD_LOOP    never returns from build, on any scene (what costs a suite a time limit per check)
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -35,6 +36,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <time.h>
 #include <unistd.h>
 
 void crash(void);
@@ -94,6 +96,14 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   (void)capacity;
 #ifdef TWINRAY_HOSTILE_BUILD_CRASH
   crash();
+#endif
+#ifdef TWINRAY_HOSTILE_BUILD_LOOP
+  {
+    struct timespec second;
+    second.tv_sec = 1;
+    second.tv_nsec = 0;
+    for (;;) nanosleep(&second, NULL); /* a hang that leaves the machine's cores to the other tests */
+  }
 #endif
 #ifdef TWINRAY_HOSTILE_CLOSE_FDS
   {
