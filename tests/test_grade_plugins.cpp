@@ -273,6 +273,16 @@ TEST(GradePlugins, TimeBudgetCutsTheRunAndReportsTheRestAsTimeouts) {
   std::filesystem::remove_all(suite);
 }
 
+// A plugin that writes over the shared memory its worker answers through is stopped at the first answer the
+// worker cannot give, as a crash, rather than waited for until the check's time limit.
+TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {
+  const Scorecard card = grade(TWINRAY_TEST_HOSTILE_SCRIBBLE_PLUGIN, {"build-empty", "closest-soup"});
+  for (const CheckResult& c : card.checks) {
+    EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("wrote over the worker's shared memory"), std::string::npos) << c.detail;
+  }
+}
+
 TEST(GradePlugins, SameScorecardTwice) {
   const std::vector<std::string> checks = {"closest-soup", "ray-interval-soup", "axis-aligned-box", "watertight-ball"};
   const Scorecard a = grade(scotty_plugin("lost-primitive"), checks), b = grade(scotty_plugin("lost-primitive"), checks);

@@ -470,6 +470,24 @@ TEST(PluginIsolation, LoadErrorsAreInputErrorsWithTheInProcessMessages) {
   expect_load_error(TWINRAY_TEST_WRONG_ABI_PLUGIN, "plugin ABI version mismatch: the plugin was built for version 2");
 }
 
+// The plugin runs in the worker's process and can write over the shared memory twinray reads its answers
+// from. What it writes there (a sequence number, a status, a count the worker never writes) ends the call at
+// once as a crash with cause "corrupted", rather than being waited on until a time limit: with the default
+// limits (300 s per build, 10 s per ray) a wait would make this test time out.
+TEST(PluginIsolation, OverwrittenSharedMemoryIsACrashNotAWait) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_SCRIBBLE_PLUGIN);
+  const std::vector<Ray> rays = isolation_rays(4096, 5);
+  std::vector<Hit> hits(rays.size());
+  const std::optional<PluginFailure> f = failure_of([&] {
+    plugin->build(isolation_scene());
+    for (int round = 0; round < 100000; ++round) plugin->intersect(rays, hits);
+  });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->cause, "corrupted") << f->what();
+  EXPECT_TRUE(contains(f->what(), "an answer the worker cannot give")) << f->what();
+}
+
 // ---- limits, shutdown, resources -----------------------------------------------------------------------------
 
 // The instance's deadline ends a hanging call even when the per-call limit is far away.

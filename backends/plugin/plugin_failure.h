@@ -15,6 +15,9 @@
 //          "timeout"       one call over PluginLimits::query_seconds / build_seconds, or past the deadline
 //          "exception"     a C++ exception escaped through the C ABI
 //          "bad-hit"       a hit on a geometry or primitive that does not exist (kind ContractViolation)
+//          "corrupted"     an answer in the shared memory that the worker cannot give (a sequence number,
+//                          status, count or flag outside the protocol of worker_protocol.h): the plugin, which
+//                          runs in the worker's process, wrote over it (kind Crash)
 //          "load"          reserved: a plugin that cannot be loaded is an InputError (missing file, not a
 //                          library, no entry point, wrong ABI, NULL function, create() NULL), and one that
 //                          crashes or hangs while loading gets one of the causes above with stage "load"
