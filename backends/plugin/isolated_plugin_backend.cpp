@@ -701,7 +701,7 @@ void IsolatedPluginBackend::Impl::build(const SceneGeometry& geometry) {
     case pw::Status::Ok: break;
     case pw::Status::BuildFailed:
       // As the in-process backend words it: the plugin declined, it did not crash.
-      throw std::runtime_error(name_ + " (" + path_.string() + "): build failed: " +
+      throw PluginBuildError(name_ + " (" + path_.string() + "): build failed: " +
                                [&] {
                                  const std::string m = bounded_string(c.message, sizeof c.message);
                                  return m.empty() ? std::string("no message given") : m;

@@ -60,6 +60,13 @@ struct PluginFailureDetails {
   std::string detail;
 };
 
+// The plugin's build() returned TWINRAY_ERROR: it declined the scene, with its own message. Not a crash, and
+// not bad input either (the scene is fine: the plugin under test failed), so commands stop with exit code 1,
+// as for a PluginFailure (docs/cli.md). Thrown by the in-process and the isolated plugin backend alike.
+struct PluginBuildError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 struct PluginFailure : std::runtime_error, PluginFailureDetails {
   explicit PluginFailure(PluginFailureDetails details);
 
