@@ -283,6 +283,24 @@ TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {
   }
 }
 
+// A plugin that reports a mesh's place in the mesh array as its geom_id is right wherever meshes are numbered
+// 0, 1, 2, ...; the quick suite's closest-mixed (spheres numbered between two meshes) catches it, and the
+// correct BVH passes it.
+TEST(GradePlugins, QuickSuiteCatchesAMeshIndexReportedAsGeomId) {
+  GradeSettings s;
+  s.plugin = scotty_plugin("mesh-index-id");
+  s.suite = "quick";
+  s.only = {"closest-soup", "closest-mixed"};
+  s.twinray = TWINRAY_BINARY;
+  const Scorecard card = run_grade(s);
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);  // one mesh, geom_id 0
+  EXPECT_EQ(check_named(card, "closest-mixed").outcome, Outcome::Fail) << lines(card);
+  s.plugin = scotty_plugin();
+  s.only = {"closest-mixed"};
+  const Scorecard good = run_grade(s);
+  EXPECT_EQ(check_named(good, "closest-mixed").outcome, Outcome::Pass) << lines(good);
+}
+
 TEST(GradePlugins, SameScorecardTwice) {
   const std::vector<std::string> checks = {"closest-soup", "ray-interval-soup", "axis-aligned-box", "watertight-ball"};
   const Scorecard a = grade(scotty_plugin("lost-primitive"), checks), b = grade(scotty_plugin("lost-primitive"), checks);
