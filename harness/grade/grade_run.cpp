@@ -48,7 +48,7 @@ Clock::time_point after(Clock::time_point start, double seconds) {
 }
 
 std::string budget_words(double budget) {
-  return fmt::format("the suite's time_budget of {:g} s ran out (--time-budget changes it)", budget);
+  return fmt::format("the suite's time_budget of {:g} s ran out; --time-budget changes it", budget);
 }
 
 // Runs one check in a fresh plugin worker and fills its outcome, detail, reproduce line, figures and image.
