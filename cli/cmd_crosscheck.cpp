@@ -63,10 +63,10 @@ void add_crosscheck_command(CLI::App& app, CommandRunner& run) {
   auto opt = std::make_shared<CrosscheckOptions>();
   CLI::App* cmd = app.add_subcommand(
       "crosscheck",
-      "Trace the same rays through several backends, classify every disagreement, and rule each one against\n"
-      "the exact backend (who is right, and why).\n"
-      "Exit code: 0 no genuine mismatch, 1 at least one genuine mismatch, 2 bad input. The arbiter's rulings are\n"
-      "reported, not part of the exit code.");
+      "Trace the same rays through several backends, classify every disagreement, rule each one against\n"
+      "the exact backend (who is right, and why), and judge every backend's u, v and ng on their own.\n"
+      "Exit code: 0 no genuine mismatch and no wrong u, v or ng, 1 otherwise (or a plugin failed: crashed, hung,\n"
+      "declined the scene), 2 bad input. The arbiter's rulings are reported, not part of the exit code.");
   cmd->add_option("scene", opt->scene, "Scene (.json) or bare mesh (.obj, .ply)")->required();
   cmd->add_option("--backends", opt->backends,
                   "Comma-separated backends; the first is the baseline the others are compared with "

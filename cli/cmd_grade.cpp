@@ -29,6 +29,7 @@ struct GradeOptions {
   std::string gradescope;
   std::string junit;
   std::string out;
+  std::optional<double> time_budget;
   bool list = false;
 };
 
@@ -70,6 +71,11 @@ int run_grade_command(const GradeOptions& opt) {
   settings.only = opt.checks;
   settings.image_dir = opt.out;
   settings.twinray = running_executable();
+  if (opt.time_budget) {
+    if (!(*opt.time_budget >= 0.0) || *opt.time_budget > 86400.0)
+      return report_bad_input("grade", "--time-budget is a number of seconds from 0 (no budget) to 86400");
+    settings.time_budget = opt.time_budget;
+  }
 
   // The header once the suite and plugin are loaded; check lines on stdout as they finish, the progress line
   // (stderr, terminals only) cleared before each.
@@ -123,6 +129,9 @@ void add_grade_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--gradescope", opt->gradescope, "Write Gradescope's results.json");
   cmd->add_option("--junit", opt->junit, "Write JUnit XML");
   cmd->add_option("--out", opt->out, "Write a PNG per camera-ray check with an image, marking wrong pixels in red");
+  cmd->add_option("--time-budget", opt->time_budget,
+                  "Seconds for the whole run, overriding the suite's time_budget (0: none); once spent, the checks\n"
+                  "still to run are reported timeout without running");
   cmd->add_flag("--list", opt->list, "List the suite's checks and exit");
   cmd->callback([opt, &run] { run = [opt] { return run_grade_command(*opt); }; });
 }

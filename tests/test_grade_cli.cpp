@@ -55,6 +55,25 @@ TEST(GradeCli, FailuresExitOneAndTheirFilesValidate) {
   EXPECT_EQ(card.at("checks").size(), 3u);
 }
 
+// A plugin whose every build hangs, with a budget of one second for the run: exit 1 within about that, and
+// every output file complete and valid, the checks that never ran included.
+TEST(GradeCli, TimeBudgetEndsTheRunWithCompleteValidOutputs) {
+  const auto dir = scratch_dir("grade-cli-budget");
+  const CommandResult r = run_twinray(grade_args(TWINRAY_TEST_HOSTILE_BUILD_LOOP_PLUGIN,
+                                                 "--time-budget 1 --json " + quoted(dir / "card.json") + " --gradescope " +
+                                                     quoted(dir / "results.json") + " --junit " + quoted(dir / "junit.xml")));
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("not run: the suite's time_budget of 1 s ran out"), std::string::npos) << r.output;
+  const nlohmann::json card = read_json_file(dir / "card.json");
+  EXPECT_EQ(card.at("time_budget"), 1.0);
+  const nlohmann::json manifest = read_json_file(grading_test_suite() / "manifest.json");
+  EXPECT_EQ(card.at("checks").size(), manifest.at("checks").size());
+  const CommandResult gs = validate_gradescope(dir / "results.json");
+  EXPECT_EQ(gs.exit_code, 0) << gs.output;
+  const CommandResult ju = validate_junit(dir / "junit.xml");
+  EXPECT_EQ(ju.exit_code, 0) << ju.output;
+}
+
 TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
   const auto dir = scratch_dir("grade-cli-bad");
   const std::string outputs = "--json " + quoted(dir / "card.json") + " --gradescope " + quoted(dir / "results.json") +
@@ -66,6 +85,7 @@ TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
       {"grade " + quoted(scotty_plugin()) + " --suite no-such-suite " + outputs, "no-such-suite"},
       {"grade " + quoted(std::filesystem::path(TWINRAY_TEST_WRONG_ABI_PLUGIN)) + " --suite quick " + outputs, "ABI"},
       {grade_args(scotty_plugin(), "--json " + quoted(dir / "missing-folder" / "card.json")), "missing-folder"},
+      {grade_args(scotty_plugin(), "--time-budget -1 " + outputs), "--time-budget"},
   };
   for (const auto& [args, words] : cases) {
     const CommandResult r = run_twinray(args);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
+#include <optional>
 
 namespace twinray::grade {
 namespace {
@@ -188,6 +189,116 @@ TEST(GradePlugins, CrashUnderConcurrencyIsReproducedByTheCheck) {
   EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
   EXPECT_NE(c.reproduce.find("--check thread-safety-soup"), std::string::npos) << c.reproduce;
   EXPECT_EQ(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
+}
+
+// A suite written for one test into a scratch folder.
+std::filesystem::path scratch_suite(const std::string& name, const std::string& manifest) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("twinray-grade-" + name);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "manifest.json") << manifest;
+  return dir;
+}
+
+Scorecard grade_with(const std::filesystem::path& plugin, const std::filesystem::path& suite,
+                     std::optional<double> time_budget = std::nullopt) {
+  GradeSettings s;
+  s.plugin = plugin;
+  s.suite = suite.string();
+  s.twinray = TWINRAY_BINARY;
+  s.time_budget = time_budget;
+  return run_grade(s);
+}
+
+// A build that never ends costs one check its time limit, not every check on the scene: a later check that
+// would give the same build no more (same scene, same memory limit, a time_limit no longer) reports the same
+// timeout at once, naming the check it happened in; one that gives it more time or another memory limit
+// builds again.
+TEST(GradePlugins, BuildThatTimedOutIsNotRepeatedUnderNoMoreTime) {
+  const std::filesystem::path suite = scratch_suite("build-memo", R"({"suite": "build-memo",
+    "defaults": {"time_limit": 1, "memory_limit_mib": 1024},
+    "scenes": {"soup": "procedural:soup:200:7"},
+    "checks": [
+      {"name": "build-soup", "category": "build", "scene": "soup", "points": 1},
+      {"name": "closest-soup", "category": "closest-hit", "scene": "soup", "rays": "uniform", "count": 100, "points": 1},
+      {"name": "any-hit-soup", "category": "any-hit", "scene": "soup", "rays": "uniform", "count": 100, "time_limit": 0.5,
+       "points": 1},
+      {"name": "closest-soup-more-memory", "category": "closest-hit", "scene": "soup", "rays": "uniform", "count": 100,
+       "memory_limit_mib": 1536, "points": 1},
+      {"name": "closest-soup-more-time", "category": "closest-hit", "scene": "soup", "rays": "uniform", "count": 100,
+       "time_limit": 1.5, "points": 1}]})");
+  const Scorecard card = grade_with(TWINRAY_TEST_HOSTILE_BUILD_LOOP_PLUGIN, suite);
+  ASSERT_EQ(card.checks.size(), 5u);
+  for (const CheckResult& c : card.checks) {
+    EXPECT_EQ(c.outcome, Outcome::Timeout) << terminal_check_line(c);
+    EXPECT_NE(c.reproduce.find("--check " + c.name), std::string::npos) << c.reproduce;
+  }
+  for (const char* recalled : {"closest-soup", "any-hit-soup"}) {
+    const CheckResult& c = check_named(card, recalled);
+    EXPECT_NE(c.detail.find("build timed out in check 'build-soup'"), std::string::npos) << c.detail;
+    EXPECT_EQ(c.figures.value("same_build_as", ""), "build-soup");
+  }
+  for (const char* rebuilt : {"closest-soup-more-memory", "closest-soup-more-time"}) {
+    const CheckResult& c = check_named(card, rebuilt);
+    EXPECT_FALSE(c.figures.contains("same_build_as")) << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("timed out in build"), std::string::npos) << c.detail;
+  }
+  std::filesystem::remove_all(suite);
+}
+
+// The suite's time budget ends the run: the check under way is cut at it (its detail says why) and the checks
+// still to run are timeouts that never started; --time-budget overrides the manifest's.
+TEST(GradePlugins, TimeBudgetCutsTheRunAndReportsTheRestAsTimeouts) {
+  const std::filesystem::path suite = scratch_suite("budget", R"({"suite": "budget", "time_budget": 1.5,
+    "defaults": {"time_limit": 1, "memory_limit_mib": 1024},
+    "scenes": {"triangle": "procedural:triangle", "soup": "procedural:soup:200:7", "empty": "procedural:empty"},
+    "checks": [
+      {"name": "build-triangle", "category": "build", "scene": "triangle", "points": 1},
+      {"name": "build-soup", "category": "build", "scene": "soup", "points": 1},
+      {"name": "build-empty", "category": "build", "scene": "empty", "points": 1}]})");
+  const Scorecard card = grade_with(TWINRAY_TEST_HOSTILE_BUILD_LOOP_PLUGIN, suite);
+  EXPECT_EQ(card.time_budget, 1.5);
+  ASSERT_EQ(card.checks.size(), 3u);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Timeout) << terminal_check_line(c);
+  EXPECT_NE(card.checks[0].detail.find("time_limit"), std::string::npos) << card.checks[0].detail;
+  EXPECT_NE(card.checks[1].detail.find("time_budget of 1.5 s ran out"), std::string::npos) << card.checks[1].detail;
+  EXPECT_NE(card.checks[2].detail.find("not run: the suite's time_budget"), std::string::npos) << card.checks[2].detail;
+  EXPECT_NE(card.checks[2].reproduce.find("--check build-empty"), std::string::npos) << card.checks[2].reproduce;
+  EXPECT_FALSE(card.passed());
+
+  // A correct plugin is not cut by a budget it does not reach, and the flag replaces the manifest's budget.
+  const Scorecard good = grade_with(scotty_plugin(), suite, 30.0);
+  EXPECT_EQ(good.time_budget, 30.0);
+  EXPECT_TRUE(good.passed()) << lines(good);
+  EXPECT_FALSE(grade_with(scotty_plugin(), suite, 0.0).time_budget.has_value());
+  std::filesystem::remove_all(suite);
+}
+
+// A plugin that writes over the shared memory its worker answers through is stopped at the first answer the
+// worker cannot give, as a crash, rather than waited for until the check's time limit.
+TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {
+  const Scorecard card = grade(TWINRAY_TEST_HOSTILE_SCRIBBLE_PLUGIN, {"build-empty", "closest-soup"});
+  for (const CheckResult& c : card.checks) {
+    EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("wrote over the worker's shared memory"), std::string::npos) << c.detail;
+  }
+}
+
+// A plugin that reports a mesh's place in the mesh array as its geom_id is right wherever meshes are numbered
+// 0, 1, 2, ...; the quick suite's closest-mixed (spheres numbered between two meshes) catches it, and the
+// correct BVH passes it.
+TEST(GradePlugins, QuickSuiteCatchesAMeshIndexReportedAsGeomId) {
+  GradeSettings s;
+  s.plugin = scotty_plugin("mesh-index-id");
+  s.suite = "quick";
+  s.only = {"closest-soup", "closest-mixed"};
+  s.twinray = TWINRAY_BINARY;
+  const Scorecard card = run_grade(s);
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);  // one mesh, geom_id 0
+  EXPECT_EQ(check_named(card, "closest-mixed").outcome, Outcome::Fail) << lines(card);
+  s.plugin = scotty_plugin();
+  s.only = {"closest-mixed"};
+  const Scorecard good = run_grade(s);
+  EXPECT_EQ(check_named(good, "closest-mixed").outcome, Outcome::Pass) << lines(good);
 }
 
 TEST(GradePlugins, SameScorecardTwice) {

@@ -80,6 +80,24 @@ TEST(GradeSuite, ParsesEveryField) {
   EXPECT_EQ(s.checks[0].visibility, Visibility::Visible);
 }
 
+TEST(GradeSuite, TimeBudgetIsOptionalAndPositive) {
+  EXPECT_FALSE(parse_suite_manifest(write_manifest("no-budget", manifest_with(R"({"name": "x", "category": "build",
+    "scene": "s", "points": 1})")) / kManifestName).time_budget_seconds.has_value());
+  const auto dir = write_manifest("budget", R"({"suite": "t", "time_budget": 90, "scenes": {"s": "procedural:triangle"},
+      "checks": [{"name": "n", "category": "build", "scene": "s", "points": 1}]})");
+  EXPECT_EQ(parse_suite_manifest(dir / kManifestName).time_budget_seconds, 90.0);
+  const auto bad = write_manifest("bad-budget", R"({"suite": "t", "time_budget": 0, "scenes": {"s": "procedural:triangle"},
+      "checks": [{"name": "n", "category": "build", "scene": "s", "points": 1}]})");
+  try {
+    parse_suite_manifest(bad / kManifestName);
+    ADD_FAILURE() << "accepted a time budget of 0";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "/time_budget") << e.what();
+  }
+  // The bundled suites have one, generous for a correct plugin (docs/grading.md).
+  for (const char* name : {"default", "quick"}) EXPECT_TRUE(load_suite(name).time_budget_seconds.has_value()) << name;
+}
+
 TEST(GradeSuite, SharedDataScenesAreMarked) {
   const auto dir = write_manifest("shared", R"({"suite": "t", "scenes": {
       "a": "$TWINRAY_SHARED/data/meshes/x.obj", "b": {"path": "x.json", "shared_data": true}, "c": "x.json"},

@@ -13,6 +13,7 @@
 #include "ray_test_util.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cstdlib>
@@ -470,6 +471,24 @@ TEST(PluginIsolation, LoadErrorsAreInputErrorsWithTheInProcessMessages) {
   expect_load_error(TWINRAY_TEST_WRONG_ABI_PLUGIN, "plugin ABI version mismatch: the plugin was built for version 2");
 }
 
+// The plugin runs in the worker's process and can write over the shared memory twinray reads its answers
+// from. What it writes there (a sequence number, a status, a count the worker never writes) ends the call at
+// once as a crash with cause "corrupted", rather than being waited on until a time limit: with the default
+// limits (300 s per build, 10 s per ray) a wait would make this test time out.
+TEST(PluginIsolation, OverwrittenSharedMemoryIsACrashNotAWait) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_SCRIBBLE_PLUGIN);
+  const std::vector<Ray> rays = isolation_rays(4096, 5);
+  std::vector<Hit> hits(rays.size());
+  const std::optional<PluginFailure> f = failure_of([&] {
+    plugin->build(isolation_scene());
+    for (int round = 0; round < 100000; ++round) plugin->intersect(rays, hits);
+  });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->cause, "corrupted") << f->what();
+  EXPECT_TRUE(contains(f->what(), "an answer the worker cannot give")) << f->what();
+}
+
 // ---- limits, shutdown, resources -----------------------------------------------------------------------------
 
 // The instance's deadline ends a hanging call even when the per-call limit is far away.
@@ -592,6 +611,41 @@ TEST(PluginIsolationCommands, StressMarksTheCrashingCaseFailedAndGoesOn) {
   EXPECT_NE(line.find("SIGSEGV"), std::string::npos) << line;
   EXPECT_NE(r.output.find("invalid-rays"), std::string::npos) << r.output;  // the next case ran
   EXPECT_NE(r.output.find("verdict:"), std::string::npos) << r.output;
+}
+
+// crosscheck judges every backend's u, v and ng on their own (hit_attributes.h): swapped barycentrics or a
+// flipped normal give identical hits (no genuine mismatch) and still fail the run; the built-in oracle has none.
+TEST(PluginIsolationCommands, CrosscheckFailsWrongAttributes) {
+  const auto dir = scratch_dir("isolation-crosscheck-attributes");
+  for (const char* bug : {"swapped_uv", "flipped_normal"}) {
+    const std::string plugin = "plugin:" + (std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
+                                            (std::string("libtwinray_scotty_") + bug + "_plugin.so")).string();
+    const CommandResult r = run_twinray("crosscheck " + quoted(source_path("scenes/cornell-box.json")) + " --backends brute," +
+                                        plugin + " --kinds camera,diffuse --rays 2000 --json " + quoted(dir / "cc.json"));
+    EXPECT_EQ(r.exit_code, 1) << bug << "\n" << r.output;
+    EXPECT_NE(r.output.find("wrong attributes of " + plugin), std::string::npos) << r.output;
+    std::ifstream in(dir / "cc.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j.at("genuine_mismatches").get<int>(), 0) << bug;
+    EXPECT_GT(j.at("wrong_attributes").at(plugin).get<int>(), 0) << bug;
+    EXPECT_EQ(j.at("wrong_attributes").at("brute").get<int>(), 0) << bug;
+    EXPECT_GT(j.at("kinds").at("camera").at("backends").at(plugin).at("wrong_attributes").get<int>(), 0) << bug;
+    EXPECT_EQ(j.at("verdict"), "fail") << bug;
+  }
+}
+
+// A plugin whose build() declines the scene failed the check; the scene is not bad input: exit 1, one line
+// naming the plugin, its message shown but not obeyed (no terminal escapes, no line breaks of its own).
+TEST(PluginIsolationCommands, CrosscheckWithADecliningPluginExitsOneWithASafeMessage) {
+  const auto dir = scratch_dir("isolation-crosscheck-declines");
+  const CommandResult r = run_twinray("crosscheck " + quoted(source_path("scenes/cornell-box.json")) +
+                                      " --backends brute,plugin:" + TWINRAY_TEST_HOSTILE_BUILD_ESCAPES_PLUGIN +
+                                      " --rays 100 --json " + quoted(dir / "cc.json"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("build failed: \\x1b[2J"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("\xc2\x9b"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cc.json"));
 }
 
 // info --build: a crash while building is a failed check (exit 1) naming the stage.

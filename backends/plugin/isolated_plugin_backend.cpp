@@ -182,11 +182,16 @@ class IsolatedPluginBackend::Impl {
   void release_channel(std::size_t index);
   void set_context(const Lease& lease, const RequestContext& context);
 
-  // Posts the channel's request and waits for the answer. Throws PluginFailure when the worker dies, when one
-  // plugin call takes longer than `per_call` or the deadline passes (then the worker is killed).
-  void round_trip(const Lease& lease, std::chrono::duration<double> per_call);
+  // Posts the channel's request (`op` on `count` rays, already in the channel) and waits for the answer.
+  // Throws PluginFailure when the worker dies, when one plugin call takes longer than `per_call` or the
+  // deadline passes (then the worker is killed), or when the answer is one the worker cannot give.
+  void round_trip(const Lease& lease, pw::Op op, std::uint32_t count, std::chrono::duration<double> per_call);
   void post(const Lease& lease);
   void wait_for_answer(const Lease& lease, std::uint32_t sequence, std::chrono::duration<double> per_call);
+  // An answer the protocol allows: the request as posted, a status its op can have, the ray index where the
+  // worker stops (worker_protocol.h). The plugin runs in the worker's process and can write to the shared
+  // memory; what it wrote there must end the call at once, not be waited for until a time limit.
+  void check_answer(const Lease& lease, pw::Op op, std::uint32_t count, Stage stage);
   void wait_for_startup();
 
   // The first failure is the one reported; later ones (the worker dying after twinray killed it) are not.
@@ -197,6 +202,9 @@ class IsolatedPluginBackend::Impl {
   [[noreturn]] void fail_timeout(const Lease& lease, Stage stage, bool deadline_passed, double call_seconds,
                                  std::chrono::duration<double> per_call);
   [[noreturn]] void fail_from_status(const Lease& lease, Stage stage);
+  [[noreturn]] void fail_corrupted(const Lease& lease, Stage stage, const std::string& what);
+  // A result's `found`, which the worker writes as 0 or 1 only.
+  bool found_of(const Lease& lease, Stage stage, std::uint32_t found);
   [[noreturn]] void fail_bad_hit(const Lease& lease, Stage stage, std::size_t request_index, const twinray_hit& h);
   // The batch loop shared by intersect and occluded: `miss(i)` resets the answer of ray i, `take(lease, k, i,
   // result)` stores the answer of request slot k (a copy) for ray i.
@@ -359,9 +367,40 @@ void IsolatedPluginBackend::Impl::post(const Lease& lease) {
   if (c.worker_sleeping.load(std::memory_order_seq_cst) != 0) pw::futex_wake_all(&c.request);
 }
 
-void IsolatedPluginBackend::Impl::round_trip(const Lease& lease, std::chrono::duration<double> per_call) {
+void IsolatedPluginBackend::Impl::round_trip(const Lease& lease, pw::Op op, std::uint32_t count,
+                                             std::chrono::duration<double> per_call) {
+  pw::Channel& c = lease.channel();
+  c.op = op;
+  c.count = count;
   post(lease);
   wait_for_answer(lease, lease.slot().sequence, per_call);
+  check_answer(lease, op, count, lease.slot().context.stage);
+}
+
+void IsolatedPluginBackend::Impl::check_answer(const Lease& lease, pw::Op op, std::uint32_t count, Stage stage) {
+  const pw::Channel& c = lease.channel();
+  const pw::Op op_now = c.op;
+  const std::uint32_t count_now = c.count;
+  if (op_now != op || count_now != count)
+    fail_corrupted(lease, stage,
+                   fmt::format("the request was changed to op {}, {} rays (posted: op {}, {} rays)", static_cast<std::uint32_t>(op_now),
+                               count_now, static_cast<std::uint32_t>(op), count));
+  const pw::Status status = c.status;
+  const bool query = op == pw::Op::Intersect || op == pw::Op::Occluded;
+  const bool possible = status == pw::Status::Ok || status == pw::Status::Exception || status == pw::Status::OutOfMemory ||
+                        (!query && (status == pw::Status::BuildFailed || status == pw::Status::SetupFailed));
+  if (!possible) fail_corrupted(lease, stage, fmt::format("status {}", static_cast<std::uint32_t>(status)));
+  // The worker sets `current` to every ray's index in turn, so an answered batch ends on its last ray.
+  const std::uint32_t at = c.current.load(std::memory_order_relaxed);
+  if (query && status == pw::Status::Ok && count > 0 && at != count - 1)
+    fail_corrupted(lease, stage, fmt::format("the answer of {} rays ends at ray {}", count, at));
+  if (!query && status == pw::Status::Ok && c.build_stats.reported > 1)
+    fail_corrupted(lease, stage, fmt::format("build_stats.reported {}", c.build_stats.reported));
+}
+
+bool IsolatedPluginBackend::Impl::found_of(const Lease& lease, Stage stage, std::uint32_t found) {
+  if (found > 1) fail_corrupted(lease, stage, fmt::format("a result's found flag is {}", found));
+  return found != 0;
 }
 
 void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint32_t sequence,
@@ -381,6 +420,10 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
     const std::uint32_t seen = c.response.load(std::memory_order_seq_cst);
     if (seen == sequence) return;
     if (ended_.load()) throw failure_for(static_cast<int>(lease.index()));
+    // Until it answers, the worker's word holds the previous request's number: any other number is not its.
+    if (seen != sequence - 1)
+      fail_corrupted(lease, lease.slot().context.stage,
+                     fmt::format("response sequence number {}, while request {} was awaited", seen, sequence));
     const auto now = Clock::now();
     const std::uint32_t at = c.current.load(std::memory_order_relaxed);
     if (at != progress) {
@@ -507,15 +550,25 @@ void IsolatedPluginBackend::Impl::fail_from_status(const Lease& lease, Stage sta
       d.cause = "out-of-memory";
       d.detail = message.empty() ? "std::bad_alloc" : message;
       break;
-    default:
+    case pw::Status::SetupFailed:
       end_worker();
       throw std::runtime_error(fmt::format("{}: the plugin worker failed in {}: {}", d.plugin, d.stage,
-                                           message.empty() ? "unknown status" : message));
+                                           message.empty() ? "no message given" : message));
+    default: fail_corrupted(lease, stage, fmt::format("status {}", static_cast<std::uint32_t>(c.status)));
   }
   {
     std::lock_guard lock(lease.slot().mutex);
     attribute_ray(lease.slot().context, c.current.load(), d);
   }
+  fail(d, static_cast<int>(lease.index()));
+}
+
+void IsolatedPluginBackend::Impl::fail_corrupted(const Lease& lease, Stage stage, const std::string& what) {
+  PluginFailureDetails d = base_details();
+  d.kind = PluginFailureKind::Crash;
+  d.cause = "corrupted";
+  d.stage = stage_name(stage);
+  d.detail = "it holds an answer the worker cannot give: " + what;
   fail(d, static_cast<int>(lease.index()));
 }
 
@@ -640,17 +693,15 @@ void IsolatedPluginBackend::Impl::build(const SceneGeometry& geometry) {
 
   Lease lease(*this);
   pw::Channel& c = lease.channel();
-  c.op = pw::Op::Build;
-  c.count = 0;
   c.geometry_offset = offset;
   c.geometry_bytes = bytes;
   set_context(lease, RequestContext{true, Stage::Build, {}, nullptr, 0});
-  round_trip(lease, std::chrono::duration<double>(limits_.build_seconds));
+  round_trip(lease, pw::Op::Build, 0, std::chrono::duration<double>(limits_.build_seconds));
   switch (c.status) {
     case pw::Status::Ok: break;
     case pw::Status::BuildFailed:
       // As the in-process backend words it: the plugin declined, it did not crash.
-      throw std::runtime_error(name_ + " (" + path_.string() + "): build failed: " +
+      throw PluginBuildError(name_ + " (" + path_.string() + "): build failed: " +
                                [&] {
                                  const std::string m = bounded_string(c.message, sizeof c.message);
                                  return m.empty() ? std::string("no message given") : m;
@@ -692,15 +743,13 @@ bool IsolatedPluginBackend::Impl::intersect(const Ray& ray, Hit& hit, QueryStats
   }
   Lease lease(*this);
   pw::Channel& c = lease.channel();
-  c.op = pw::Op::Intersect;
-  c.count = 1;
   c.rays[0] = to_plugin_ray(ray);
   set_context(lease, RequestContext{true, Stage::Intersect, std::span<const Ray>(&ray, 1), nullptr, 1});
-  round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+  round_trip(lease, pw::Op::Intersect, 1, std::chrono::duration<double>(limits_.query_seconds));
   if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Intersect);
   const pw::RayResult r = c.results[0];  // one copy: what is checked is what is used
   add_stats(stats, 1, c.nodes_visited, c.primitives_tested);
-  if (r.found == 0) return false;
+  if (!found_of(lease, Stage::Intersect, r.found)) return false;
   if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, 0, r.hit);
   hit = from_plugin_hit(r.hit);
   return true;
@@ -714,15 +763,13 @@ bool IsolatedPluginBackend::Impl::occluded(const Ray& ray, QueryStats* stats) {
   }
   Lease lease(*this);
   pw::Channel& c = lease.channel();
-  c.op = pw::Op::Occluded;
-  c.count = 1;
   c.rays[0] = to_plugin_ray(ray);
   set_context(lease, RequestContext{true, Stage::Occluded, std::span<const Ray>(&ray, 1), nullptr, 1});
-  round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+  round_trip(lease, pw::Op::Occluded, 1, std::chrono::duration<double>(limits_.query_seconds));
   if (c.status != pw::Status::Ok) fail_from_status(lease, Stage::Occluded);
   const std::uint32_t found = c.results[0].found;
   add_stats(stats, 1, c.nodes_visited, c.primitives_tested);
-  return found != 0;
+  return found_of(lease, Stage::Occluded, found);
 }
 
 // A batch runs on one channel, in chunks of up to kChunkRays valid rays (invalid rays are misses and never
@@ -745,10 +792,8 @@ void IsolatedPluginBackend::Impl::query_in_chunks(std::span<const Ray> rays, pw:
       source[n++] = i;
     }
     if (n == 0) continue;
-    c.op = op;
-    c.count = n;
     set_context(lease, RequestContext{true, stage, rays, source.data(), n});
-    round_trip(lease, std::chrono::duration<double>(limits_.query_seconds));
+    round_trip(lease, op, n, std::chrono::duration<double>(limits_.query_seconds));
     if (c.status != pw::Status::Ok) fail_from_status(lease, stage);
     nodes += c.nodes_visited;
     primitives += c.primitives_tested;
@@ -764,7 +809,7 @@ void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span
   query_in_chunks(
       rays, pw::Op::Intersect, Stage::Intersect, stats, [&](std::size_t i) { hits[i] = Hit{}; },
       [&](const Lease& lease, std::uint32_t k, std::size_t i, pw::RayResult r) {
-        if (r.found == 0) return;
+        if (!found_of(lease, Stage::Intersect, r.found)) return;
         if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
         hits[i] = from_plugin_hit(r.hit);
       });
@@ -774,7 +819,9 @@ void IsolatedPluginBackend::Impl::occluded(std::span<const Ray> rays, std::span<
   assert(rays.size() == occluded.size());
   query_in_chunks(
       rays, pw::Op::Occluded, Stage::Occluded, stats, [&](std::size_t i) { occluded[i] = 0; },
-      [&](const Lease&, std::uint32_t, std::size_t i, pw::RayResult r) { occluded[i] = r.found != 0 ? 1 : 0; });
+      [&](const Lease& lease, std::uint32_t, std::size_t i, pw::RayResult r) {
+        occluded[i] = found_of(lease, Stage::Occluded, r.found) ? 1 : 0;
+      });
 }
 
 void IsolatedPluginBackend::Impl::shutdown() {

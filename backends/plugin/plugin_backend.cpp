@@ -1,5 +1,6 @@
 #include "backends/plugin/plugin_backend.h"
 
+#include "backends/plugin/plugin_failure.h"
 #include "backends/plugin/plugin_hit.h"
 #include "backends/plugin/plugin_library.h"
 #include "backends/plugin/twinray_plugin.h"
@@ -133,7 +134,7 @@ void PluginBackend::build(const SceneGeometry& geometry) {
   guarded("build", [&] { status = table_.build(self_, &g, error, sizeof(error)); });
   if (status != TWINRAY_OK) {
     error[sizeof(error) - 1] = '\0';  // do not trust the plugin to terminate it
-    throw std::runtime_error(name_ + " (" + library_->path().string() + "): build failed: " +
+    throw PluginBuildError(name_ + " (" + library_->path().string() + "): build failed: " +
                              (error[0] != '\0' ? error : "no message given"));
   }
 

@@ -15,6 +15,9 @@
 //          "timeout"       one call over PluginLimits::query_seconds / build_seconds, or past the deadline
 //          "exception"     a C++ exception escaped through the C ABI
 //          "bad-hit"       a hit on a geometry or primitive that does not exist (kind ContractViolation)
+//          "corrupted"     an answer in the shared memory that the worker cannot give (a sequence number,
+//                          status, count or flag outside the protocol of worker_protocol.h): the plugin, which
+//                          runs in the worker's process, wrote over it (kind Crash)
 //          "load"          reserved: a plugin that cannot be loaded is an InputError (missing file, not a
 //                          library, no entry point, wrong ABI, NULL function, create() NULL), and one that
 //                          crashes or hangs while loading gets one of the causes above with stage "load"
@@ -55,6 +58,13 @@ struct PluginFailureDetails {
   // is worth saying (the exception's what(), the limit that was exceeded, ...).
   std::string plugin;
   std::string detail;
+};
+
+// The plugin's build() returned TWINRAY_ERROR: it declined the scene, with its own message. Not a crash, and
+// not bad input either (the scene is fine: the plugin under test failed), so commands stop with exit code 1,
+// as for a PluginFailure (docs/cli.md). Thrown by the in-process and the isolated plugin backend alike.
+struct PluginBuildError : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 struct PluginFailure : std::runtime_error, PluginFailureDetails {

@@ -4,6 +4,7 @@
 #include "harness/arbiter/arbiter.h"
 #include "harness/arbiter/tolerances.h"
 #include "harness/crosscheck/arbitration.h"
+#include "harness/crosscheck/hit_attributes.h"
 #include "harness/crosscheck/hit_comparison.h"
 #include "harness/crosscheck/ray_generation.h"
 #include "core/scene/scene_loader.h"
@@ -52,6 +53,26 @@ BackendRun trace(const Backend& backend, const std::vector<Ray>& rays) {
     run.any_closest_disagreements += (run.occluded[i] != 0) != run.closest[i].found() ? 1 : 0;
   }
   return run;
+}
+
+// Closest hits whose u, v or ng break the conventions (hit_attributes.h), with the first few.
+struct AttributeTally {
+  std::size_t wrong = 0;
+  std::vector<std::pair<std::size_t, std::string>> examples;  // ray index, why
+};
+
+constexpr std::size_t kAttributeExamples = 3;
+
+AttributeTally rule_every_attribute(const GeometryIndex& index, const std::vector<Ray>& rays, const std::vector<Hit>& hits) {
+  AttributeTally t;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (!hits[i].found()) continue;
+    const AttributeRuling r = rule_attributes(index, rays[i], hits[i]);
+    if (r.right) continue;
+    ++t.wrong;
+    if (t.examples.size() < kAttributeExamples) t.examples.emplace_back(i, r.detail);
+  }
+  return t;
 }
 
 double rate(std::size_t n, double seconds) { return seconds > 0.0 ? static_cast<double>(n) / seconds : 0.0; }
@@ -162,7 +183,8 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
   std::vector<std::string> capped_kinds;
 
   Progress progress("crosscheck", settings.kinds.size() * backends.size());
-  std::size_t total_rays = 0, total_identical = 0, total_genuine = 0;
+  std::size_t total_rays = 0, total_identical = 0, total_genuine = 0, total_wrong_attributes = 0;
+  std::vector<std::size_t> wrong_attributes(backends.size(), 0);
   std::vector<double> closest_seconds(backends.size(), 0.0);
   std::vector<std::size_t> closest_rays(backends.size(), 0);
   nlohmann::json j_kinds = nlohmann::json::object();
@@ -179,20 +201,31 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
     }
 
     report += fmt::format("\n{} rays: {}\n", to_string(kind), rays.size());
-    report += fmt::format("  {:<14} {:>10} {:>12} {:>12} {:>14}\n", "backend", "hits", "closest Mr/s", "any Mr/s",
-                          "any!=closest");
+    report += fmt::format("  {:<14} {:>10} {:>12} {:>12} {:>14} {:>12}\n", "backend", "hits", "closest Mr/s", "any Mr/s",
+                          "any!=closest", "wrong u,v,ng");
     nlohmann::json j_kind = {{"rays", rays.size()}};
+    std::string attribute_examples;
     for (std::size_t k = 0; k < backends.size(); ++k) {
       const BackendRun& r = runs[k];
-      report += fmt::format("  {:<14} {:>10} {:>12.3f} {:>12.3f} {:>14}\n", names[k], r.hits,
+      // Every backend's hits are judged on their own (not against the baseline): a right primitive at the right
+      // t with swapped u and v or a flipped normal agrees with every other backend and still renders wrong.
+      const AttributeTally attributes = rule_every_attribute(index, rays, r.closest);
+      report += fmt::format("  {:<14} {:>10} {:>12.3f} {:>12.3f} {:>14} {:>12}\n", names[k], r.hits,
                             rate(rays.size(), r.seconds_closest) * 1e-6, rate(rays.size(), r.seconds_any) * 1e-6,
-                            r.any_closest_disagreements);
+                            r.any_closest_disagreements, attributes.wrong);
+      for (const auto& [i, why] : attributes.examples)
+        attribute_examples += fmt::format("    wrong attributes of {}, ray {}: {}\n      bits: {}\n      {}: {}\n", names[k],
+                                          i, why, hex_ray(rays[i]), names[k], describe_hit(r.closest[i]));
       total_genuine += r.any_closest_disagreements;
+      total_wrong_attributes += attributes.wrong;
+      wrong_attributes[k] += attributes.wrong;
       j_kind["backends"][names[k]] = {{"hits", r.hits},
                                       {"closest_rays_per_second", rate(rays.size(), r.seconds_closest)},
                                       {"any_rays_per_second", rate(rays.size(), r.seconds_any)},
-                                      {"any_closest_disagreements", r.any_closest_disagreements}};
+                                      {"any_closest_disagreements", r.any_closest_disagreements},
+                                      {"wrong_attributes", attributes.wrong}};
     }
+    report += attribute_examples;
     report += fmt::format("  {:<14} {:>20} {:>7} {:>7} {:>8} {:>12} {:>22}\n", fmt::format("vs {}", names[0]),
                           "identical", "edge", "tie", "genuine", "max rel dt", "any-hit edge/genuine");
     j_kind["comparisons"] = nlohmann::json::array();
@@ -300,12 +333,16 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
       arbiter_wrong += t.wrong;
     }
   }
-  report += fmt::format("\nverdict: {} ({} genuine mismatches, {:.4f}% identical)\n", total_genuine == 0 ? "PASS" : "FAIL",
-                        total_genuine, 100.0 * identical_fraction);
+  const bool passed = total_genuine == 0 && total_wrong_attributes == 0;
+  report += fmt::format("\nverdict: {} ({} genuine mismatches, {} closest hits with wrong u, v or ng, {:.4f}% identical)\n",
+                        passed ? "PASS" : "FAIL", total_genuine, total_wrong_attributes, 100.0 * identical_fraction);
+  nlohmann::json j_wrong_attributes = nlohmann::json::object();
+  for (std::size_t k = 0; k < backends.size(); ++k) j_wrong_attributes[names[k]] = wrong_attributes[k];
 
   CrosscheckReport out;
   out.text = std::move(report);
   out.genuine_mismatches = total_genuine;
+  out.wrong_attributes = total_wrong_attributes;
   out.arbiter_wrong = arbiter_wrong;
   out.json = {{"scene", scene.source.string()},
               {"seed", settings.seed},
@@ -316,9 +353,10 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
               {"kinds", j_kinds},
               {"rays_per_second", j_rates},
               {"genuine_mismatches", total_genuine},
+              {"wrong_attributes", j_wrong_attributes},
               {"identical_fraction", identical_fraction},
               {"tolerances", {{"rel_t", kRelT}, {"abs_world", kAbsWorld}, {"grazing_cos", kGrazingCos}}},
-              {"verdict", total_genuine == 0 ? "pass" : "fail"}};
+              {"verdict", passed ? "pass" : "fail"}};
   if (arbiter) {
     out.json["arbiter"] = j_arbiter;
     out.json["arbiter_settings"] = {{"enabled", true},

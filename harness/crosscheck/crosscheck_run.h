@@ -31,8 +31,10 @@ struct CrosscheckReport {
   std::string text;       // the human-readable tables, verdict line included
   nlohmann::json json;    // the JSON document of docs/cli.md
   std::size_t genuine_mismatches = 0;
+  // Closest hits whose u, v or ng break the conventions (hit_attributes.h), all backends: part of the verdict.
+  std::size_t wrong_attributes = 0;
   std::size_t arbiter_wrong = 0;  // answers the arbiter ruled wrong, all backends (informative: not in the verdict)
-  bool passed() const { return genuine_mismatches == 0; }
+  bool passed() const { return genuine_mismatches == 0 && wrong_attributes == 0; }
 };
 
 // Throws InputError for a bad scene or plugin, std::invalid_argument for bad settings.

@@ -7,7 +7,6 @@
 
 #include <fmt/core.h>
 
-#include <chrono>
 
 namespace twinray::grade {
 
@@ -17,10 +16,8 @@ constexpr std::size_t kDefaultProbeRays = 256;
 
 CheckVerdict run_build_check(CheckContext& ctx) {
   const SceneGeometry& geometry = ctx.scene.geometry();
-  std::unique_ptr<Backend> plugin = ctx.env.plugin.launch(ctx.limits());
-  const auto start = std::chrono::steady_clock::now();
-  plugin->build(geometry);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  double wall = 0.0;
+  const std::unique_ptr<Backend> plugin = ctx.built_plugin(&wall);
   const BuildStats stats = plugin->build_stats();
 
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform}, ctx.count_or(kDefaultProbeRays));

@@ -6,12 +6,24 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <chrono>
 
 namespace twinray::grade {
 
-std::unique_ptr<Backend> CheckContext::built_plugin() const {
+std::unique_ptr<Backend> CheckContext::built_plugin(double* build_seconds) const {
+  const bool first = builds++ == 0;
+  if (first && failed_builds != nullptr)
+    if (std::optional<FailedBuild> f = failed_builds->recall(spec)) throw RecalledBuildFailure(std::move(*f));
   std::unique_ptr<Backend> plugin = env.plugin.launch(limits());
-  plugin->build(scene.geometry());
+  const auto start = std::chrono::steady_clock::now();
+  const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  try {
+    plugin->build(scene.geometry());
+  } catch (...) {
+    if (first && failed_builds != nullptr) failed_builds->remember(spec, std::current_exception(), seconds(), own_deadline);
+    throw;
+  }
+  if (build_seconds != nullptr) *build_seconds = seconds();
   return plugin;
 }
 
@@ -36,7 +48,9 @@ std::string CheckContext::trace_command(const Ray& ray) const {
                      shell_quote("plugin:" + env.plugin.path().string() + "," + reference_name()), format_ray_hex(ray));
 }
 
-std::string CheckContext::grade_command() const {
+std::string CheckContext::grade_command() const { return grade::grade_command(env, spec); }
+
+std::string grade_command(const CheckEnvironment& env, const CheckSpec& spec) {
   const std::string suite = env.suite.bundled ? env.suite.name : env.suite.dir.string();
   return fmt::format("{} grade {} --suite {} --check {}", shell_quote(env.twinray), shell_quote(env.plugin.path().string()),
                      shell_quote(suite), shell_quote(spec.name));

@@ -5,6 +5,7 @@
 // into the check's outcome. docs/grading.md describes what every category checks and why.
 
 #include "core/image/image.h"
+#include "harness/grade/failed_builds.h"
 #include "harness/grade/grade_scene.h"
 #include "harness/grade/plugin_launcher.h"
 #include "harness/grade/suite.h"
@@ -31,10 +32,17 @@ struct CheckContext {
   GradeScene& scene;
   const CheckEnvironment& env;
   std::chrono::steady_clock::time_point deadline;
+  // Builds of this plugin that failed in earlier checks (failed_builds.h); none remembered when null.
+  FailedBuilds* failed_builds = nullptr;
+  // False when the deadline is the suite's time_budget running out before the check's own time_limit.
+  bool own_deadline = true;
+  mutable int builds = 0;  // plugin builds started by this check
 
   LaunchLimits limits() const { return {deadline, spec.memory_limit_bytes, spec.ray_time_limit_seconds}; }
-  // A fresh plugin instance, built on the check's scene.
-  std::unique_ptr<Backend> built_plugin() const;
+  // A fresh plugin instance, built on the check's scene. Throws RecalledBuildFailure instead when the same
+  // build failed in an earlier check under limits no more generous (failed_builds.h); `build_seconds`, when
+  // given, receives the wall-clock time of the build call.
+  std::unique_ptr<Backend> built_plugin(double* build_seconds = nullptr) const;
   // The built-in backend the check's answers are compared with.
   std::string reference_name() const;
   // `twinray trace SCENE --backends plugin:PATH,REFERENCE --ray '...'`: replays one ray.
@@ -66,6 +74,9 @@ CheckVerdict run_thread_safety_check(CheckContext& context);
 CheckVerdict run_determinism_check(CheckContext& context);
 CheckVerdict run_performance_check(CheckContext& context);
 CheckVerdict run_tree_quality_check(CheckContext& context);
+
+// `twinray grade PLUGIN --suite SUITE --check NAME` for any check of the suite.
+std::string grade_command(const CheckEnvironment& env, const CheckSpec& spec);
 
 // A word for the shell: as it is when safe, else single-quoted.
 std::string shell_quote(const std::string& word);

@@ -4,6 +4,7 @@
 #include "core/util/fp_mode.h"
 #include "core/util/input_error.h"
 #include "harness/grade/checks.h"
+#include "harness/grade/failed_builds.h"
 #include "harness/grade/grade_scene.h"
 #include "harness/grade/plugin_launcher.h"
 #include "harness/grade/suite.h"
@@ -15,6 +16,7 @@
 #include <chrono>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 namespace twinray::grade {
@@ -39,13 +41,27 @@ void prepare_references(CheckContext& ctx) {
   if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality) ctx.scene.reference("bvh");
 }
 
+using Clock = std::chrono::steady_clock;
+
+Clock::time_point after(Clock::time_point start, double seconds) {
+  return start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+std::string budget_words(double budget) {
+  return fmt::format("the suite's time_budget of {:g} s ran out; --time-budget changes it", budget);
+}
+
 // Runs one check in a fresh plugin worker and fills its outcome, detail, reproduce line, figures and image.
-void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckResult& r,
-             std::vector<PendingImage>& images) {
+// `run_end` is when the run's time budget runs out, if it has one.
+void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckResult& r, std::vector<PendingImage>& images,
+             std::optional<Clock::time_point> run_end, double budget) {
   // The references are built before the check's clock starts: its time limit is the plugin's.
   prepare_references(ctx);
-  ctx.deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                       std::chrono::duration<double>(ctx.spec.time_limit_seconds));
+  ctx.deadline = after(Clock::now(), ctx.spec.time_limit_seconds);
+  if (run_end && *run_end < ctx.deadline) {
+    ctx.deadline = *run_end;
+    ctx.own_deadline = false;
+  }
   try {
     CheckVerdict v = run_check(ctx);
     r.outcome = v.passed ? Outcome::Pass : Outcome::Fail;
@@ -63,8 +79,14 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
     throw;
   } catch (const std::logic_error&) {
     throw;  // a bad --check name or a grader bug is never the plugin's fault
+  } catch (const RecalledBuildFailure& recalled) {
+    r.outcome = recalled.failed.failure.outcome;
+    r.detail = one_line(FailedBuilds::recalled_detail(recalled.failed));
+    r.reproduce = ctx.grade_command();
+    r.figures = {{"same_build_as", recalled.failed.check}};
   } catch (...) {
-    const FailureReport f = classify_failure(std::current_exception(), ctx.spec.ray_time_limit_seconds);
+    const FailureReport f = classify_failure(std::current_exception(), ctx.spec.ray_time_limit_seconds,
+                                             ctx.own_deadline ? std::string(kCheckDeadline) : budget_words(budget));
     r.outcome = f.outcome;
     r.detail = one_line(f.detail);  // the plugin's build error message or exception text, as one safe line
     // One ray replays a crash or hang only when it happened to that ray alone: under the thread-safety check's
@@ -92,7 +114,7 @@ std::vector<const CheckSpec*> selected_checks(const Suite& suite, const std::vec
 }  // namespace
 
 Scorecard run_grade(const GradeSettings& settings) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   const ScopedFlushDenormals ftz;  // the mode every command queries backends in (core/util/fp_mode.h)
   const Suite suite = load_suite(settings.suite);
   const std::vector<const CheckSpec*> checks = selected_checks(suite, settings.only);
@@ -105,8 +127,18 @@ Scorecard run_grade(const GradeSettings& settings) {
   card.claims = plugin.traits();
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();
+  const std::optional<double> flag_budget = settings.time_budget;
+  if (flag_budget) {
+    if (*flag_budget > 0.0) card.time_budget = *flag_budget;
+  } else {
+    card.time_budget = suite.time_budget_seconds;
+  }
+  // The budget counts from the first check: loading the suite and the plugin is not the plugin's time.
+  std::optional<Clock::time_point> run_end;
 
   if (settings.on_start) settings.on_start(card, checks.size());
+  if (card.time_budget) run_end = after(Clock::now(), *card.time_budget);
+  FailedBuilds failed_builds;
 
   // Scenes are loaded on first use and dropped after their last check (a million-triangle scene and its
   // reference backends should not stay for the rest of the suite).
@@ -128,7 +160,7 @@ Scorecard run_grade(const GradeSettings& settings) {
     const bool claimed = claims(plugin.traits(), spec.category);
     r.required = spec.requirement == Requirement::Required || (spec.requirement == Requirement::IfClaimed && claimed);
     r.max_points = spec.requirement == Requirement::IfClaimed && !claimed ? 0.0 : spec.points;
-    const auto check_start = std::chrono::steady_clock::now();
+    const auto check_start = Clock::now();
 
     // Prerequisites that ran and did not pass. One skipped for want of the shared data folder makes this
     // check uncounted too: its points must not depend on the machine.
@@ -148,11 +180,16 @@ Scorecard run_grade(const GradeSettings& settings) {
       r.outcome = Outcome::Skipped;
       r.detail = "needs " + unmet + " to pass first";
       if (unmet_uncounted) r.max_points = 0.0;
+    } else if (run_end && Clock::now() >= *run_end) {
+      r.outcome = Outcome::Timeout;
+      r.detail = "not run: " + budget_words(*card.time_budget);
+      r.reproduce = grade_command(env, spec);
+      r.figures = {{"time_budget_seconds", *card.time_budget}};
     } else {
       std::unique_ptr<GradeScene>& scene = scenes[spec.scene];
       if (!scene) scene = std::make_unique<GradeScene>(scene_spec, suite);
-      CheckContext ctx{spec, *scene, env, {}};
-      execute(ctx, settings.image_dir, r, card.images);
+      CheckContext ctx{spec, *scene, env, {}, &failed_builds};
+      execute(ctx, settings.image_dir, r, card.images, run_end, card.time_budget.value_or(0.0));
       if (!r.required && r.failed() && spec.requirement == Requirement::IfClaimed)
         r.detail += " (not claimed by the plugin: reported, not required)";
     }

@@ -7,12 +7,15 @@
 // not pass is skipped and earns none; a check on a scene that needs the shared data folder is skipped and
 // worth nothing when the folder is absent; an "if-claimed" check of a property the plugin does not claim
 // runs, is reported, and is worth nothing; a measuring check without thresholds is worth nothing. A plugin
-// crash or timeout is the outcome of the check it happened in, and the next check starts a new worker.
+// crash or timeout is the outcome of the check it happened in, and the next check starts a new worker. A build
+// that timed out or crashed is not repeated by later checks that would give it no more (failed_builds.h), and
+// once the run's time budget is spent the checks still to run are reported `timeout` without running.
 
 #include "harness/grade/scorecard.h"
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +27,8 @@ struct GradeSettings {
   std::vector<std::string> only;           // run just these checks (their prerequisites are then not required)
   std::filesystem::path image_dir;         // disagreement PNGs go here (Scorecard::images; empty: none made)
   std::string twinray = "twinray";         // the program name reproduce lines start with
+  // Seconds for the whole run (--time-budget), overriding the suite's "time_budget"; 0: no budget.
+  std::optional<double> time_budget;
   // Called once the suite and plugin are loaded, before the first check (the terminal header), then after
   // every check, in order (the terminal report streams its lines from here).
   std::function<void(const Scorecard& card, std::size_t total)> on_start;

@@ -44,7 +44,8 @@ nlohmann::json scorecard_json(const Scorecard& card) {
                       {"crash", card.count(Outcome::Crash)},
                       {"timeout", card.count(Outcome::Timeout)},
                       {"skipped", card.count(Outcome::Skipped)}}},
-          {"seconds", card.seconds}};
+          {"seconds", card.seconds},
+          {"time_budget", card.time_budget ? nlohmann::json(*card.time_budget) : nlohmann::json(nullptr)}};
 }
 
 }  // namespace twinray::grade

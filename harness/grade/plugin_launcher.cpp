@@ -21,11 +21,11 @@ PluginLimits limits_of(const LaunchLimits& l) {
 
 // One line: what happened and where, in the isolated backend's own words (plugin_failure.h). The ray goes
 // into the reproduce line and the plugin's output into the check's figures, so both are left out here.
-std::string describe_failure(const PluginFailure& f) {
+std::string describe_failure(const PluginFailure& f, const std::string& deadline = kCheckDeadline) {
   PluginFailureDetails d = f;
   d.plugin = "the plugin";
-  // In a check, the deadline is the check's own time limit: say which.
-  if (d.deadline_passed) d.detail = "the check's time_limit, build included, ran out";
+  // In a check, the deadline is the check's own time limit (or the suite's budget): say which.
+  if (d.deadline_passed) d.detail = deadline;
   d.ray.reset();
   d.ray_index.reset();
   return describe(d);
@@ -50,7 +50,7 @@ std::unique_ptr<Backend> PluginLauncher::launch(const LaunchLimits& limits) cons
   return make_isolated_plugin_backend(path_, limits_of(limits));
 }
 
-FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds) {
+FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds, const std::string& deadline) {
   try {
     std::rethrow_exception(failure);
   } catch (const InputError&) {
@@ -60,7 +60,7 @@ FailureReport classify_failure(const std::exception_ptr& failure, double ray_sec
     r.outcome = f.kind == PluginFailureKind::Timeout ? Outcome::Timeout
                 : f.kind == PluginFailureKind::Crash ? Outcome::Crash
                                                       : Outcome::Fail;
-    r.detail = describe_failure(f);
+    r.detail = describe_failure(f, deadline);
     // A ray replays a crash, or a call that never ends. When the check's time runs out, the ray in flight is
     // blamed only if it had been in the plugin for half the limit of one ray: otherwise it merely came last,
     // replaying it alone reproduces nothing, and the check's `grade --check` line is what reproduces it.

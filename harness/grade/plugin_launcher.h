@@ -53,7 +53,10 @@ struct FailureReport {
 
 // What the exception a plugin call threw means for the check. Rethrows what is not a plugin failure (bad
 // input, a grader bug) so it is never mistaken for the student's fault.
-// `ray_seconds` is the check's limit for one ray (ray_time_limit).
-FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds);
+// `ray_seconds` is the check's limit for one ray (ray_time_limit); `deadline` says, in words, what the
+// deadline of a timeout that ran into it was.
+inline constexpr const char* kCheckDeadline = "the check's time_limit, build included, ran out";
+FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds,
+                               const std::string& deadline = kCheckDeadline);
 
 }  // namespace twinray::grade

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,7 @@ struct Scorecard {
   std::vector<CheckResult> checks;
   nlohmann::json performance = nlohmann::json::object();  // figures of the performance and tree-quality checks
   double seconds = 0.0;
+  std::optional<double> time_budget;  // seconds for the whole run (the suite's or --time-budget), if any
   std::vector<PendingImage> images;
 
   double score() const;

@@ -20,6 +20,7 @@ namespace {
 constexpr double kDefaultTimeLimit = 60.0;                               // seconds per check, build included
 constexpr std::size_t kDefaultMemoryLimitMiB = 4096;                     // the plugin's worker process
 constexpr double kMaxTimeLimit = 3600.0;
+constexpr double kMaxTimeBudget = 86400.0;  // a day: a budget is a guard against hangs, not a schedule
 // One ray is one call into the plugin. Two seconds is a thousand times what a brute-force loop over a
 // million triangles takes, so only a plugin stuck in a loop reaches it, and it is found in seconds rather
 // than at the end of the check's whole budget.
@@ -275,7 +276,7 @@ Suite parse_suite_manifest(const std::filesystem::path& manifest_path) {
   const std::filesystem::path manifest = std::filesystem::absolute(manifest_path, ec);
   const Json doc = parse_json_text(read_input_file(manifest), manifest);
   const JsonNode root(doc, "", manifest);
-  root.expect_object({"suite", "description", "defaults", "scenes", "checks"});
+  root.expect_object({"suite", "description", "defaults", "time_budget", "scenes", "checks"});
 
   Suite suite;
   suite.manifest = manifest;
@@ -286,6 +287,11 @@ Suite parse_suite_manifest(const std::filesystem::path& manifest_path) {
   if (auto n = root.optional_member("description")) suite.description = n->as_string();
   Defaults defaults;
   if (auto n = root.optional_member("defaults")) defaults = parse_defaults(*n);
+  if (auto n = root.optional_member("time_budget")) {
+    const double t = n->as_double();
+    if (!(t > 0.0) || t > kMaxTimeBudget) n->fail(fmt::format("a time budget is in (0, {}] seconds", kMaxTimeBudget));
+    suite.time_budget_seconds = t;
+  }
 
   const JsonNode scenes = root.member("scenes");
   if (!scenes.is_object()) scenes.fail("\"scenes\" is an object mapping a scene id to a scene");

@@ -83,6 +83,9 @@ struct Suite {
   bool bundled = false;            // found by name among the bundled suites
   std::map<std::string, SuiteScene> scenes;
   std::vector<CheckSpec> checks;
+  // "time_budget": wall-clock seconds for the whole run; once spent, the checks still to run are reported
+  // `timeout` without running (a check under way is cut at it). None when absent.
+  std::optional<double> time_budget_seconds;
 
   const CheckSpec* find_check(std::string_view name) const;
 };

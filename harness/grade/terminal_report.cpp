@@ -32,8 +32,9 @@ std::string outcome_label(const CheckResult& c) {
 }  // namespace
 
 std::string terminal_header(const Scorecard& card, std::size_t checks) {
-  return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {})\n  the plugin claims: {}\n\n", card.plugin_name,
-                     card.plugin, card.suite, checks, card.suite_path, claims_text(card.claims));
+  const std::string budget = card.time_budget ? fmt::format(", time budget {:g} s", *card.time_budget) : "";
+  return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {}{})\n  the plugin claims: {}\n\n", card.plugin_name,
+                     card.plugin, card.suite, checks, card.suite_path, budget, claims_text(card.claims));
 }
 
 std::string terminal_check_line(const CheckResult& c) {

@@ -74,7 +74,10 @@ std::string xml_escape(std::string_view text) {
   return out;
 }
 
-std::string one_line(std::string_view text) {
+namespace {
+
+// Valid UTF-8 with every control character but those in `kept` written as a visible \xNN.
+std::string escape_controls(std::string_view text, std::string_view kept) {
   const std::string utf8 = valid_utf8(text);
   std::string out;
   out.reserve(utf8.size());
@@ -82,7 +85,7 @@ std::string one_line(std::string_view text) {
     const auto c = static_cast<std::uint8_t>(utf8[i]);
     // C1 controls are U+0080..U+009F: 0xC2 followed by 0x80..0x9F in UTF-8.
     const bool c1 = c == 0xC2 && i + 1 < utf8.size() && static_cast<std::uint8_t>(utf8[i + 1]) <= 0x9F;
-    if (c < 0x20 || c == 0x7F || c1) {
+    if ((c < 0x20 && kept.find(static_cast<char>(c)) == std::string_view::npos) || c == 0x7F || c1) {
       const unsigned code = c1 ? static_cast<std::uint8_t>(utf8[++i]) : c;
       constexpr char kHex[] = "0123456789abcdef";
       out += "\\x";
@@ -94,5 +97,11 @@ std::string one_line(std::string_view text) {
   }
   return out;
 }
+
+}  // namespace
+
+std::string one_line(std::string_view text) { return escape_controls(text, ""); }
+
+std::string printable_lines(std::string_view text) { return escape_controls(text, "\n\t"); }
 
 }  // namespace twinray::grade

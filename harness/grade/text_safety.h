@@ -22,4 +22,8 @@ std::string xml_escape(std::string_view text);
 // fake result on the grader's terminal.
 std::string one_line(std::string_view text);
 
+// What a plugin printed, for a terminal: as one_line, but newlines and tabs are kept, so its lines stay lines
+// (and still cannot move the cursor, clear the screen or change colours).
+std::string printable_lines(std::string_view text);
+
 }  // namespace twinray::grade

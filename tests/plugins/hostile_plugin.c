@@ -22,6 +22,11 @@
  *                 worker's shared memory (3) and lifeline (4), which the sandbox refuses to let go
  *   BUILD_ESCAPES is named, and fails its build with a message, full of terminal escapes, newlines, a fake
  *                 scorecard line and invalid UTF-8
+ *   BUILD_LOOP    never returns from build, on any scene (what costs a suite a time limit per check)
+ *   SCRIBBLE      maps the worker's shared memory (descriptor 3) in build and starts a thread that fills all of
+ *                 it with the byte 0xA5 every two milliseconds: sequence numbers, statuses and counts the
+ *                 worker could never write. The build returns once the first fill is done, so the answer to
+ *                 the build request is always one of them
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -34,7 +39,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 void crash(void);
@@ -87,6 +95,24 @@ static void* normal_worker(void* arg) {
 }
 #endif
 
+#ifdef TWINRAY_HOSTILE_SCRIBBLE
+static volatile int scribbled;
+
+static void* scribble(void* arg) {
+  const struct stat* st = (const struct stat*)arg;
+  void* shared = mmap(NULL, (size_t)st->st_size, PROT_READ | PROT_WRITE, MAP_SHARED, 3, 0);
+  struct timespec pause;
+  pause.tv_sec = 0;
+  pause.tv_nsec = 2000000L;
+  if (shared == MAP_FAILED) return NULL;
+  for (;;) {
+    memset(shared, 0xA5, (size_t)st->st_size);
+    scribbled = 1;
+    nanosleep(&pause, NULL);
+  }
+}
+#endif
+
 static int hostile_build(void* self, const twinray_geometry* geometry, char* error, size_t capacity) {
   (void)self;
   (void)geometry;
@@ -94,6 +120,28 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   (void)capacity;
 #ifdef TWINRAY_HOSTILE_BUILD_CRASH
   crash();
+#endif
+#ifdef TWINRAY_HOSTILE_BUILD_LOOP
+  {
+    struct timespec second;
+    second.tv_sec = 1;
+    second.tv_nsec = 0;
+    for (;;) nanosleep(&second, NULL); /* a hang that leaves the machine's cores to the other tests */
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_SCRIBBLE
+  {
+    static struct stat st;
+    pthread_t thread;
+    struct timespec pause;
+    pause.tv_sec = 0;
+    pause.tv_nsec = 1000000L;
+    if (fstat(3, &st) != 0 || pthread_create(&thread, NULL, scribble, &st) != 0) {
+      write_message(error, capacity, "could not start the scribbler");
+      return TWINRAY_ERROR;
+    }
+    while (!scribbled) nanosleep(&pause, NULL);
+  }
 #endif
 #ifdef TWINRAY_HOSTILE_CLOSE_FDS
   {

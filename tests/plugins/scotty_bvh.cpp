@@ -22,6 +22,8 @@
 //                      less than 1, its root)
 //  15 CONCURRENT_CRASH  crashes when two closest-hit calls are inside it at once (what a race on a shared
 //                      buffer does): only concurrent calls show it, and no single ray replays it
+//  16 MESH_INDEX_ID    a triangle's geom_id is its mesh's index in the geometry's array, not the mesh's geom_id:
+//                      right wherever meshes are numbered 0, 1, 2, ... with no sphere in between
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -160,6 +162,7 @@ struct Primitive {
   const twinray_mesh* mesh = nullptr;      // a triangle of this mesh...
   const twinray_sphere* sphere = nullptr;  // ...or this sphere
   twinray_id index = 0;                    // the triangle's index in its mesh
+  twinray_id mesh_index = 0;               // its mesh's place in the geometry's mesh array
 
   Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(mesh->indices[3 * index + k])); }
 
@@ -223,7 +226,7 @@ struct Primitive {
     tr.t = t;
     tr.u = static_cast<float>(v / det);
     tr.v = static_cast<float>(w / det);
-    tr.geom = mesh->geom_id;
+    tr.geom = BUG(16) ? mesh_index : mesh->geom_id;
     tr.prim = index;
     tr.primitive = this;
     return tr;
@@ -515,8 +518,8 @@ int scotty_build(void* self, const twinray_geometry* g, char* error, std::size_t
     std::vector<Primitive> prims;
     for (std::size_t m = 0; m < g->mesh_count; ++m)
       for (std::size_t i = 0; i < g->meshes[m].triangle_count; ++i)
-        prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i)});
-    for (std::size_t s = 0; s < g->sphere_count; ++s) prims.push_back({nullptr, &g->spheres[s], 0});
+        prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i), static_cast<twinray_id>(m)});
+    for (std::size_t s = 0; s < g->sphere_count; ++s) prims.push_back({nullptr, &g->spheres[s], 0, 0});
     static_cast<BVH*>(self)->build(std::move(prims));
     return TWINRAY_OK;
   } catch (const std::bad_alloc&) {
