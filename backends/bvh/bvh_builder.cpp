@@ -13,8 +13,10 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace twinray {
 
@@ -316,8 +318,9 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
 
 class Builder {
  public:
-  Builder(std::span<PrimRef> refs, std::uint32_t second_kind_begin, const BvhBuildOptions& o)
-      : refs_(refs), second_kind_begin_(second_kind_begin), o_(o) {}
+  // `nodes` has room for 2 refs.size() - 1 nodes (build() writes them).
+  Builder(std::span<PrimRef> refs, BvhNode* nodes, std::uint32_t second_kind_begin, const BvhBuildOptions& o)
+      : refs_(refs), nodes_(nodes), second_kind_begin_(second_kind_begin), o_(o) {}
 
   // Box, centroid bounds and kind count of refs_[begin, end): in parallel for a large range.
   RangeInfo info_of(std::size_t begin, std::size_t end) const {
@@ -328,38 +331,55 @@ class Builder {
     }, [](RangeInfo& acc, const RangeInfo& part) { acc.merge(part); });
   }
 
-  // Appends the subtree over refs_[begin, end), described by `info`, to `out` in depth-first order. Child
-  // indices are relative to the start of `out`, which build() relies on when splicing subtrees built by
-  // other tasks.
-  void build(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::vector<BvhNode>& out) const {
+  // Writes the subtree over refs_[begin, end), described by `info`, to nodes_[at, at + 2 n - 1) in
+  // depth-first order and returns how many nodes it wrote; child offsets are indices into nodes_. A serial
+  // subtree is contiguous from `at`. A parallel node gives each child the room its worst case needs (a
+  // subtree over m primitives has at most 2 m - 1 nodes, since every leaf holds at least one), so both
+  // children are built in place at once and nothing is copied; the gaps this leaves are squeezed out by
+  // one depth-first copy at the end (compact()).
+  std::size_t build(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::size_t at) const {
     const std::size_t n = end - begin;
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
 
-    const std::size_t node_index = out.size();
     const Bounds3 box = info.box(), centroids = info.centroids();
-    out.push_back(BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0});
+    BvhNode& node = nodes_[at];
+    node = BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0};
 
     const Split split = choose_split(begin, end, box, centroids, depth, mixed, info.second_kind);
     if (split.kind == Split::Kind::None) {
-      out[node_index].count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
-      return;
+      node.count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
+      return 1;
     }
     RangeInfo left_info, right_info;
     const std::size_t mid = partition(begin, end, centroids, split, left_info, right_info);
 
     if (o_.parallel && n >= kParallelGrain) {
-      // The left subtree goes straight into `out` (only its task appends there meanwhile); the right one is
-      // built apart and copied behind it, rebased. Copying both cost a copy of every node per parallel level.
-      std::vector<BvhNode> right;
-      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, out); },
-                           [&] { build(mid, end, right_info, depth + 1, right); });
-      out[node_index].offset = static_cast<std::uint32_t>(out.size());
-      append_rebased(right, out);
-    } else {
-      build(begin, mid, left_info, depth + 1, out);
-      out[node_index].offset = static_cast<std::uint32_t>(out.size());
-      build(mid, end, right_info, depth + 1, out);
+      const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
+      std::size_t left_nodes = 0, right_nodes = 0;
+      tbb::parallel_invoke([&] { left_nodes = build(begin, mid, left_info, depth + 1, at + 1); },
+                           [&] { right_nodes = build(mid, end, right_info, depth + 1, right_at); });
+      node.offset = static_cast<std::uint32_t>(right_at);
+      return 1 + left_nodes + right_nodes;
     }
+    const std::size_t left_nodes = build(begin, mid, left_info, depth + 1, at + 1);
+    node.offset = static_cast<std::uint32_t>(at + 1 + left_nodes);
+    return 1 + left_nodes + build(mid, end, right_info, depth + 1, at + 1 + left_nodes);
+  }
+
+  // Copies the subtree at nodes_[at] to `out` depth-first without the gaps the parallel build left, with
+  // its child offsets rebased, and counts its leaves and depth on the way.
+  void compact(std::size_t at, std::size_t depth, BvhTree& out) const {
+    out.max_depth = std::max(out.max_depth, depth);
+    const BvhNode& node = nodes_[at];
+    const std::size_t index = out.nodes.size();
+    out.nodes.push_back(node);
+    if (node.is_leaf()) {
+      ++out.leaves;
+      return;
+    }
+    compact(at + 1, depth + 1, out);
+    out.nodes[index].offset = static_cast<std::uint32_t>(out.nodes.size());
+    compact(node.second_child(), depth + 1, out);
   }
 
  private:
@@ -379,14 +399,6 @@ class Builder {
     T acc = parts[0];
     for (std::size_t c = 1; c < chunks; ++c) fold(acc, parts[c]);
     return acc;
-  }
-
-  static void append_rebased(const std::vector<BvhNode>& subtree, std::vector<BvhNode>& out) {
-    const auto base = static_cast<std::uint32_t>(out.size());
-    for (BvhNode node : subtree) {
-      if (!node.is_leaf()) node.offset += base;
-      out.push_back(node);
-    }
   }
 
   Split choose_split(std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
@@ -643,20 +655,10 @@ class Builder {
   }
 
   std::span<PrimRef> refs_;
+  BvhNode* nodes_;
   std::uint32_t second_kind_begin_;
   const BvhBuildOptions& o_;
 };
-
-void measure(const std::vector<BvhNode>& nodes, std::size_t index, std::size_t depth, BvhTree& tree) {
-  tree.max_depth = std::max(tree.max_depth, depth);
-  const BvhNode& node = nodes[index];
-  if (node.is_leaf()) {
-    ++tree.leaves;
-    return;
-  }
-  measure(nodes, index + 1, depth + 1, tree);
-  measure(nodes, node.second_child(), depth + 1, tree);
-}
 
 }  // namespace
 
@@ -674,14 +676,16 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   else
     make_refs(0, refs.size());
 
-  tree.nodes.reserve(2 * bounds.size());
-  const Builder builder(refs, second_kind_begin, options);
-  builder.build(0, refs.size(), builder.info_of(0, refs.size()), 0, tree.nodes);
-  tree.nodes.shrink_to_fit();
+  // Uninitialised: build() writes every node it reports, and only those are read.
+  static_assert(std::is_trivially_default_constructible_v<BvhNode>, "new[] must not initialise the nodes");
+  const std::unique_ptr<BvhNode[]> nodes(new BvhNode[2 * refs.size() - 1]);
+  const Builder builder(refs, nodes.get(), second_kind_begin, options);
+  const std::size_t node_count = builder.build(0, refs.size(), builder.info_of(0, refs.size()), 0, 0);
+  tree.nodes.reserve(node_count);
+  builder.compact(0, 0, tree);
 
   tree.prim_order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) tree.prim_order[i] = refs[i].id;
-  measure(tree.nodes, 0, 0, tree);
   tree.sah_cost = sah_cost(tree.nodes, options);
   return tree;
 }
