@@ -1,12 +1,13 @@
 #include "backends/bvh/bvh_builder.h"
 
 #include "backends/bvh/primitive_store.h"
+#include "backends/simd/isa.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
-#include <emmintrin.h>
+#include <immintrin.h>
 
 #include <algorithm>
 #include <array>
@@ -44,7 +45,7 @@ constexpr std::size_t kRangeChunk = std::size_t{1} << 13;
 
 // A primitive as the builder moves it: 32 bytes, two SSE loads (lo with the id in its fourth lane, hi with
 // padding). The centroid is recomputed where needed, exactly as Bounds3::center() computes it.
-struct alignas(16) PrimRef {
+struct alignas(32) PrimRef {  // 32: one aligned AVX load
   glm::vec3 lo;
   std::uint32_t id;
   glm::vec3 hi;
@@ -218,14 +219,63 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
   if constexpr (kDense) g.mark_used(map.bins);
 }
 
+// bin_range<true, kSecond> with AVX2: each bin's box is kept as one 8-lane row (lo, -hi), so that one min
+// updates the whole box, since max(a, b) = -min(-a, -b) bit for bit: _mm_max_ps(x, acc) is
+// `x > acc ? x : acc` and _mm_min_ps(-x, -acc) is `-x < -acc ? -x : -acc`, the same choice for every
+// pair (signed zeros and NaN included), and negation is exact. An empty bin's row is +inf in all lanes
+// (lo = +inf, hi = -inf, as BinGrid::clear). The rows are written back to the grid's SSE layout at the
+// end (48 rows): the kernel takes the ranges that are binned densely (kDenseFrom).
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e,
+                                        const BinMapping& map, std::uint32_t second_kind_begin) {
+  const int bins = map.bins;
+  __m256 box[3][kMaxBins];
+  const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < bins; ++k) {
+      box[a][k] = empty;
+      g.count[a][k] = 0;
+      g.second_kind[a][k] = 0;
+    }
+  const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
+  alignas(16) std::int32_t k[4];
+  for (std::size_t i = b; i < e; ++i) {
+    const PrimRef& r = refs[i];
+    __m128 lo, hi;
+    map.bins_of(r, lo, hi, k);
+    const __m256 row = _mm256_xor_ps(_mm256_load_ps(&r.lo.x), negate_hi);
+    const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    for (int axis = 0; axis < 3; ++axis) {
+      __m256& bin = box[axis][k[axis]];
+      bin = _mm256_min_ps(row, bin);  // operand order of extend_lo / extend_hi
+      ++g.count[axis][k[axis]];
+      if constexpr (kSecond) g.second_kind[axis][k[axis]] += second;
+    }
+  }
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  for (int a = 0; a < 3; ++a)
+    for (int k2 = 0; k2 < bins; ++k2) {
+      g.lo[a][k2] = _mm256_castps256_ps128(box[a][k2]);
+      g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(box[a][k2], 1), sign);
+    }
+  g.mark_used(bins);
+}
+
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
 // time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).
 constexpr std::size_t kDenseFrom = 32;
 
 inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
-                      std::uint32_t second_kind_begin, bool second_kind_present) {
+                      std::uint32_t second_kind_begin, bool second_kind_present, bool avx2) {
   const bool dense = e - b >= kDenseFrom;
+  // Every dense range: writing the rows back costs less than the AVX2 kernel saves from 32 primitives on
+  // (docs/bvh-backend.md: from 16 it cost more, from 256 it saved less).
+  if (avx2 && dense) {
+    if (second_kind_present) bin_range_avx2<true>(g, refs, b, e, map, second_kind_begin);
+    else bin_range_avx2<false>(g, refs, b, e, map, second_kind_begin);
+    return;
+  }
   if (!second_kind_present) {
     if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
     else bin_range<false, false>(g, refs, b, e, map, second_kind_begin);
@@ -319,8 +369,8 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
 class Builder {
  public:
   // `nodes` has room for 2 refs.size() - 1 nodes (build() writes them).
-  Builder(std::span<PrimRef> refs, BvhNode* nodes, std::uint32_t second_kind_begin, const BvhBuildOptions& o)
-      : home_(refs.data()), nodes_(nodes), second_kind_begin_(second_kind_begin), o_(o) {
+  Builder(std::span<PrimRef> refs, BvhNode* nodes, std::uint32_t second_kind_begin, const BvhBuildOptions& o, Isa isa)
+      : home_(refs.data()), nodes_(nodes), second_kind_begin_(second_kind_begin), o_(o), avx2_(isa >= Isa::Avx2) {
     if (refs.size() >= kParallelRangeGrain) {
       // Uninitialised: a range is scattered into it before it is read.
       static_assert(std::is_trivially_default_constructible_v<PrimRef>, "new[] must not initialise the scratch");
@@ -559,11 +609,11 @@ class Builder {
     const std::span<const PrimRef> refs(range_refs, end);
     BinGrid grid;
     if (!o_.parallel || end - begin < kParallelRangeGrain) {
-      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0);
+      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0, avx2_);
     } else {
       grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
         BinGrid g;
-        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0);
+        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0, avx2_);
         return g;
       }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
     }
@@ -727,11 +777,12 @@ class Builder {
   BvhNode* nodes_;
   std::uint32_t second_kind_begin_;
   const BvhBuildOptions& o_;
+  bool avx2_;  // large ranges are binned by bin_range_avx2
 };
 
 }  // namespace
 
-BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options) {
+BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options, Isa isa) {
   validate(options);
   BvhTree tree;
   if (bounds.empty()) return tree;
@@ -751,7 +802,7 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   // Uninitialised: build() writes every node it reports, and only those are read.
   static_assert(std::is_trivially_default_constructible_v<BvhNode>, "new[] must not initialise the nodes");
   const std::unique_ptr<BvhNode[]> nodes(new BvhNode[2 * refs.size() - 1]);
-  Builder builder(refs, nodes.get(), second_kind_begin, options);
+  Builder builder(refs, nodes.get(), second_kind_begin, options, isa);
   const std::size_t node_count = builder.build_tree(n, builder.info_of(refs.data(), 0, n));
   tree.nodes.reserve(node_count);
   builder.compact(0, 0, tree);
