@@ -406,6 +406,22 @@ class Builder {
     return count;
   }
 
+  // Copies the subtree at nodes_[at] to `out` depth-first without the gaps the parallel build left, with
+  // its child offsets rebased, and counts its leaves and depth on the way.
+  void compact(std::size_t at, std::size_t depth, BvhTree& out) const {
+    out.max_depth = std::max(out.max_depth, depth);
+    const BvhNode& node = nodes_[at];
+    const std::size_t index = out.nodes.size();
+    out.nodes.push_back(node);
+    if (node.is_leaf()) {
+      ++out.leaves;
+      return;
+    }
+    compact(at + 1, depth + 1, out);
+    out.nodes[index].offset = static_cast<std::uint32_t>(out.nodes.size());
+    compact(node.second_child(), depth + 1, out);
+  }
+
  private:
   // A subtree under the large nodes, built in the second phase of build_tree().
   struct Pending {
@@ -482,24 +498,6 @@ class Builder {
     return 1 + left_nodes + build(mid, end, right_info, depth + 1, at + 1 + left_nodes);
   }
 
- public:
-  // Copies the subtree at nodes_[at] to `out` depth-first without the gaps the parallel build left, with
-  // its child offsets rebased, and counts its leaves and depth on the way.
-  void compact(std::size_t at, std::size_t depth, BvhTree& out) const {
-    out.max_depth = std::max(out.max_depth, depth);
-    const BvhNode& node = nodes_[at];
-    const std::size_t index = out.nodes.size();
-    out.nodes.push_back(node);
-    if (node.is_leaf()) {
-      ++out.leaves;
-      return;
-    }
-    compact(at + 1, depth + 1, out);
-    out.nodes[index].offset = static_cast<std::uint32_t>(out.nodes.size());
-    compact(node.second_child(), depth + 1, out);
-  }
-
- private:
   // Runs `body(b, e)` over fixed chunks of [begin, end) and folds the results in chunk order. The chunks
   // do not depend on the thread count, and every fold used here (min, max, integer sums) is exact, so the
   // result is the same serial or parallel. Large ranges run in TBB tasks when the build is parallel: the
