@@ -181,19 +181,24 @@ struct BinGrid {
   }
 };
 
-// How a range of primitives maps to bins: the bin of each coordinate as Builder::bin_of() computes it.
-// Clamping before the truncation instead of after gives the same index for every finite value (a NaN, from
-// an unusable axis, becomes bin 0: max_ps returns its second operand).
+// How a range of primitives maps to bins: a centroid coordinate c falls in bin (c - lo) * scale truncated,
+// clamped to [0, bins - 1] (c == hi maps to `bins`, and rounding may overshoot). The clamp comes before the
+// truncation, which gives the same index as after it for every finite value (a NaN, from an unusable axis,
+// becomes bin 0: max_ps returns its second operand). Binning and partitioning both use this one mapping.
 struct BinMapping {
   __m128 c_lo, c_scale, top;
   int bins;
 
+  // The bins of a box's centroid on the three axes (fourth lane unused).
+  __m128i bins_of(__m128 lo, __m128 hi) const {
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
+    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
+    return _mm_cvttps_epi32(x);
+  }
   void bins_of(const PrimRef& r, __m128& lo, __m128& hi, std::int32_t* k) const {
     lo = r.lo4();
     hi = r.hi4();
-    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
-    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
-    _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_cvttps_epi32(x));
+    _mm_store_si128(reinterpret_cast<__m128i*>(k), bins_of(lo, hi));
   }
 };
 
@@ -560,12 +565,6 @@ class Builder {
     return best;
   }
 
-  // Bin index of a centroid coordinate; clamped because c == hi maps to `bins` (and rounding may overshoot).
-  static int bin_of(float c, float lo, float scale, int bins) {
-    const int b = static_cast<int>((c - lo) * scale);
-    return std::clamp(b, 0, bins - 1);
-  }
-
   // The mapping of centroids to bins on every axis, and which axes are usable: an extent of zero or one too
   // small for a finite scale cannot be binned.
   BinMapping bin_mapping(const Bounds3& centroids, std::array<bool, 3>& usable) const {
@@ -667,12 +666,16 @@ class Builder {
     std::size_t mid = end;
     switch (split.kind) {
       case Split::Kind::Bin: {
+        // A primitive goes left when its bin on the split axis, computed as the binning did (same mapping,
+        // BinMapping::bins_of), is below the plane: all three lanes at once, then the split axis's bit.
+        std::array<bool, 3> usable{};
+        const BinMapping map = bin_mapping(centroids, usable);
+        const __m128i plane = _mm_set1_epi32(split.bin);
         const int axis = split.axis;
-        const float lo = centroids.lo[axis];
-        const float scale = static_cast<float>(o_.bins) / (centroids.hi[axis] - lo);
-        const int bins = o_.bins;
-        // The centroid's coordinate exactly as PrimRef::centroid() computes it.
-        const auto goes_left = [&](const PrimRef& r) { return bin_of(0.5f * (r.lo[axis] + r.hi[axis]), lo, scale, bins) < split.bin; };
+        const auto goes_left = [&](const PrimRef& r) {
+          const __m128i below = _mm_cmplt_epi32(map.bins_of(r.lo4(), r.hi4()), plane);
+          return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
+        };
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
