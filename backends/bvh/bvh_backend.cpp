@@ -18,7 +18,7 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   const auto start = std::chrono::steady_clock::now();
 
   const std::size_t n_triangles = geometry.triangle_count();
-  BvhTree tree = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_);
+  BvhTree tree = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_, isa_);
 
   // Leaves appear in depth-first order with increasing ranges of prim_order; each is copied to its kind's
   // array in that order and its offset rebased to that array (primitive_gather.h).

@@ -1,20 +1,23 @@
 #include "backends/bvh/bvh_builder.h"
 
 #include "backends/bvh/primitive_store.h"
+#include "backends/simd/isa.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
-#include <emmintrin.h>
+#include <immintrin.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace twinray {
 
@@ -42,11 +45,11 @@ constexpr std::size_t kRangeChunk = std::size_t{1} << 13;
 
 // A primitive as the builder moves it: 32 bytes, two SSE loads (lo with the id in its fourth lane, hi with
 // padding). The centroid is recomputed where needed, exactly as Bounds3::center() computes it.
-struct alignas(16) PrimRef {
+struct alignas(32) PrimRef {  // 32: one aligned AVX load
   glm::vec3 lo;
   std::uint32_t id;
   glm::vec3 hi;
-  float pad = 0.0f;
+  float pad;  // no initialiser: PrimRef stays trivially constructible, so scratch arrays are not cleared
 
   Bounds3 box() const { return Bounds3{lo, hi}; }
   glm::vec3 centroid() const { return 0.5f * (lo + hi); }
@@ -178,19 +181,24 @@ struct BinGrid {
   }
 };
 
-// How a range of primitives maps to bins: the bin of each coordinate as Builder::bin_of() computes it.
-// Clamping before the truncation instead of after gives the same index for every finite value (a NaN, from
-// an unusable axis, becomes bin 0: max_ps returns its second operand).
+// How a range of primitives maps to bins: a centroid coordinate c falls in bin (c - lo) * scale truncated,
+// clamped to [0, bins - 1] (c == hi maps to `bins`, and rounding may overshoot). The clamp comes before the
+// truncation, which gives the same index as after it for every finite value (a NaN, from an unusable axis,
+// becomes bin 0: max_ps returns its second operand). Binning and partitioning both use this one mapping.
 struct BinMapping {
   __m128 c_lo, c_scale, top;
   int bins;
 
+  // The bins of a box's centroid on the three axes (fourth lane unused).
+  __m128i bins_of(__m128 lo, __m128 hi) const {
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
+    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
+    return _mm_cvttps_epi32(x);
+  }
   void bins_of(const PrimRef& r, __m128& lo, __m128& hi, std::int32_t* k) const {
     lo = r.lo4();
     hi = r.hi4();
-    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));
-    const __m128 x = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, c_lo), c_scale), _mm_setzero_ps()), top);
-    _mm_store_si128(reinterpret_cast<__m128i*>(k), _mm_cvttps_epi32(x));
+    _mm_store_si128(reinterpret_cast<__m128i*>(k), bins_of(lo, hi));
   }
 };
 
@@ -216,14 +224,63 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
   if constexpr (kDense) g.mark_used(map.bins);
 }
 
+// bin_range<true, kSecond> with AVX2: each bin's box is kept as one 8-lane row (lo, -hi), so that one min
+// updates the whole box, since max(a, b) = -min(-a, -b) bit for bit: _mm_max_ps(x, acc) is
+// `x > acc ? x : acc` and _mm_min_ps(-x, -acc) is `-x < -acc ? -x : -acc`, the same choice for every
+// pair (signed zeros and NaN included), and negation is exact. An empty bin's row is +inf in all lanes
+// (lo = +inf, hi = -inf, as BinGrid::clear). The rows are written back to the grid's SSE layout at the
+// end (48 rows): the kernel takes the ranges that are binned densely (kDenseFrom).
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e,
+                                        const BinMapping& map, std::uint32_t second_kind_begin) {
+  const int bins = map.bins;
+  __m256 box[3][kMaxBins];
+  const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < bins; ++k) {
+      box[a][k] = empty;
+      g.count[a][k] = 0;
+      g.second_kind[a][k] = 0;
+    }
+  const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
+  alignas(16) std::int32_t k[4];
+  for (std::size_t i = b; i < e; ++i) {
+    const PrimRef& r = refs[i];
+    __m128 lo, hi;
+    map.bins_of(r, lo, hi, k);
+    const __m256 row = _mm256_xor_ps(_mm256_load_ps(&r.lo.x), negate_hi);
+    const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    for (int axis = 0; axis < 3; ++axis) {
+      __m256& bin = box[axis][k[axis]];
+      bin = _mm256_min_ps(row, bin);  // operand order of extend_lo / extend_hi
+      ++g.count[axis][k[axis]];
+      if constexpr (kSecond) g.second_kind[axis][k[axis]] += second;
+    }
+  }
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  for (int a = 0; a < 3; ++a)
+    for (int k2 = 0; k2 < bins; ++k2) {
+      g.lo[a][k2] = _mm256_castps256_ps128(box[a][k2]);
+      g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(box[a][k2], 1), sign);
+    }
+  g.mark_used(bins);
+}
+
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
 // time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).
 constexpr std::size_t kDenseFrom = 32;
 
 inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
-                      std::uint32_t second_kind_begin, bool second_kind_present) {
+                      std::uint32_t second_kind_begin, bool second_kind_present, bool avx2) {
   const bool dense = e - b >= kDenseFrom;
+  // Every dense range: writing the rows back costs less than the AVX2 kernel saves from 32 primitives on
+  // (docs/bvh-backend.md: from 16 it cost more, from 256 it saved less).
+  if (avx2 && dense) {
+    if (second_kind_present) bin_range_avx2<true>(g, refs, b, e, map, second_kind_begin);
+    else bin_range_avx2<false>(g, refs, b, e, map, second_kind_begin);
+    return;
+  }
   if (!second_kind_present) {
     if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
     else bin_range<false, false>(g, refs, b, e, map, second_kind_begin);
@@ -316,53 +373,136 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
 
 class Builder {
  public:
-  Builder(std::span<PrimRef> refs, std::uint32_t second_kind_begin, const BvhBuildOptions& o)
-      : refs_(refs), second_kind_begin_(second_kind_begin), o_(o) {}
+  // `nodes` has room for 2 refs.size() - 1 nodes (build() writes them).
+  Builder(std::span<PrimRef> refs, BvhNode* nodes, std::uint32_t second_kind_begin, const BvhBuildOptions& o, Isa isa)
+      : home_(refs.data()), nodes_(nodes), second_kind_begin_(second_kind_begin), o_(o), avx2_(isa >= Isa::Avx2) {
+    if (refs.size() >= kParallelRangeGrain) {
+      // Uninitialised: a range is scattered into it before it is read.
+      static_assert(std::is_trivially_default_constructible_v<PrimRef>, "new[] must not initialise the scratch");
+      scratch_owner_.reset(new PrimRef[refs.size()]);
+      scratch_ = scratch_owner_.get();
+    }
+  }
 
-  // Box, centroid bounds and kind count of refs_[begin, end): in parallel for a large range.
-  RangeInfo info_of(std::size_t begin, std::size_t end) const {
+  // Box, centroid bounds and kind count of refs[begin, end): in parallel for a large range.
+  RangeInfo info_of(const PrimRef* refs, std::size_t begin, std::size_t end) const {
     return reduce_chunks<RangeInfo>(begin, end, [&](std::size_t b, std::size_t e) {
       RangeInfo info;
-      for (std::size_t i = b; i < e; ++i) info.add(refs_[i], second_kind_begin_);
+      for (std::size_t i = b; i < e; ++i) info.add(refs[i], second_kind_begin_);
       return info;
     }, [](RangeInfo& acc, const RangeInfo& part) { acc.merge(part); });
   }
 
-  // Appends the subtree over refs_[begin, end), described by `info`, to `out` in depth-first order. Child
-  // indices are relative to the start of `out`, which build() relies on when splicing subtrees built by
-  // other tasks.
-  void build(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::vector<BvhNode>& out) const {
-    const std::size_t n = end - begin;
-    const bool mixed = info.second_kind != 0 && info.second_kind != n;
+  // Writes the whole tree to nodes_ (room for 2 n - 1 nodes, see build()) and returns its node count.
+  // In two phases when the input is large: first the large nodes (kParallelRangeGrain primitives or more),
+  // whose binning and partitions run in parallel chunks and move the primitives between two arrays; then,
+  // the scratch array freed, the small subtrees below them, in parallel. The tree is the same as one
+  // depth-first build gives (node positions depend on primitive counts only; compact() orders them).
+  std::size_t build_tree(std::size_t n, const RangeInfo& root) {
+    if (n < kParallelRangeGrain) return build(0, n, root, 0, 0);
+    std::vector<Pending> below;
+    std::size_t count = build_large(0, n, root, 0, 0, false, below);
+    scratch_owner_.reset();  // only large ranges were ever in it
+    std::vector<std::size_t> counts(below.size());
+    const auto run = [&](std::size_t k) { counts[k] = build(below[k].begin, below[k].end, below[k].info, below[k].depth, below[k].at); };
+    if (o_.parallel) tbb::parallel_for(std::size_t{0}, below.size(), std::size_t{1}, run);
+    else for (std::size_t k = 0; k < below.size(); ++k) run(k);
+    for (const std::size_t c : counts) count += c;
+    return count;
+  }
 
-    const std::size_t node_index = out.size();
-    const Bounds3 box = info.box(), centroids = info.centroids();
-    out.push_back(BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0});
-
-    const Split split = choose_split(begin, end, box, centroids, depth, mixed, info.second_kind);
-    if (split.kind == Split::Kind::None) {
-      out[node_index].count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
+  // Copies the subtree at nodes_[at] to `out` depth-first without the gaps the parallel build left, with
+  // its child offsets rebased, and counts its leaves and depth on the way.
+  void compact(std::size_t at, std::size_t depth, BvhTree& out) const {
+    out.max_depth = std::max(out.max_depth, depth);
+    const BvhNode& node = nodes_[at];
+    const std::size_t index = out.nodes.size();
+    out.nodes.push_back(node);
+    if (node.is_leaf()) {
+      ++out.leaves;
       return;
     }
-    RangeInfo left_info, right_info;
-    const std::size_t mid = partition(begin, end, centroids, split, left_info, right_info);
-
-    if (o_.parallel && n >= kParallelGrain) {
-      // The left subtree goes straight into `out` (only its task appends there meanwhile); the right one is
-      // built apart and copied behind it, rebased. Copying both cost a copy of every node per parallel level.
-      std::vector<BvhNode> right;
-      tbb::parallel_invoke([&] { build(begin, mid, left_info, depth + 1, out); },
-                           [&] { build(mid, end, right_info, depth + 1, right); });
-      out[node_index].offset = static_cast<std::uint32_t>(out.size());
-      append_rebased(right, out);
-    } else {
-      build(begin, mid, left_info, depth + 1, out);
-      out[node_index].offset = static_cast<std::uint32_t>(out.size());
-      build(mid, end, right_info, depth + 1, out);
-    }
+    compact(at + 1, depth + 1, out);
+    out.nodes[index].offset = static_cast<std::uint32_t>(out.nodes.size());
+    compact(node.second_child(), depth + 1, out);
   }
 
  private:
+  // A subtree under the large nodes, built in the second phase of build_tree().
+  struct Pending {
+    std::size_t begin, end;
+    RangeInfo info;
+    std::size_t depth, at;
+  };
+
+  // A large node (kParallelRangeGrain primitives or more, always split: never a leaf) at nodes_[at] and
+  // the large nodes below it; the small subtrees below them are appended to `below`. Its primitives are
+  // in the scratch array if `in_scratch`. Each child gets the room of its worst case (see build()), so
+  // where the small subtrees go is known before they are built. Returns the number of large nodes written.
+  std::size_t build_large(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::size_t at,
+                          bool in_scratch, std::vector<Pending>& below) const {
+    const std::size_t n = end - begin;
+    PrimRef* const refs = in_scratch ? scratch_ : home_;
+    const Bounds3 box = info.box(), centroids = info.centroids();
+    const bool mixed = info.second_kind != 0 && info.second_kind != n;
+    const Split split = choose_split(refs, begin, end, box, centroids, depth, mixed, info.second_kind);
+    RangeInfo left_info, right_info;
+    bool children_in_scratch = in_scratch;
+    const std::size_t mid = partition(refs, begin, end, centroids, split, left_info, right_info, children_in_scratch);
+    const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
+    nodes_[at] = BvhNode{box.lo, static_cast<std::uint32_t>(right_at), box.hi, 0};
+    std::size_t count = 1;
+    const auto child = [&](std::size_t b, std::size_t e, const RangeInfo& child_info, std::size_t child_at) {
+      if (e - b >= kParallelRangeGrain) {
+        count += build_large(b, e, child_info, depth + 1, child_at, children_in_scratch, below);
+        return;
+      }
+      // Small ranges are partitioned in place in the home array.
+      if (children_in_scratch)
+        for_chunks(b, e, [&](std::size_t cb, std::size_t ce) { std::copy(scratch_ + cb, scratch_ + ce, home_ + cb); });
+      below.push_back({b, e, child_info, depth + 1, child_at});
+    };
+    child(begin, mid, left_info, at + 1);
+    child(mid, end, right_info, right_at);
+    return count;
+  }
+
+  // Writes the subtree over the small range [begin, end) of the home array, described by `info`, to
+  // nodes_[at, at + 2 n - 1) in depth-first order and returns how many nodes it wrote; child offsets are
+  // indices into nodes_. A serial subtree is contiguous from `at`. A parallel node gives each child the room
+  // its worst case needs (a subtree over m primitives has at most 2 m - 1 nodes, since every leaf holds at
+  // least one), so both children are built in place at once and nothing is copied; the gaps this leaves are
+  // squeezed out by one depth-first copy at the end (compact()).
+  std::size_t build(std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, std::size_t at) const {
+    const std::size_t n = end - begin;
+    const bool mixed = info.second_kind != 0 && info.second_kind != n;
+
+    const Bounds3 box = info.box(), centroids = info.centroids();
+    BvhNode& node = nodes_[at];
+    node = BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0};
+
+    const Split split = choose_split(home_, begin, end, box, centroids, depth, mixed, info.second_kind);
+    if (split.kind == Split::Kind::None) {
+      node.count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
+      return 1;
+    }
+    RangeInfo left_info, right_info;
+    bool in_scratch = false;  // small ranges stay in place
+    const std::size_t mid = partition(home_, begin, end, centroids, split, left_info, right_info, in_scratch);
+
+    if (o_.parallel && n >= kParallelGrain) {
+      const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
+      std::size_t left_nodes = 0, right_nodes = 0;
+      tbb::parallel_invoke([&] { left_nodes = build(begin, mid, left_info, depth + 1, at + 1); },
+                           [&] { right_nodes = build(mid, end, right_info, depth + 1, right_at); });
+      node.offset = static_cast<std::uint32_t>(right_at);
+      return 1 + left_nodes + right_nodes;
+    }
+    const std::size_t left_nodes = build(begin, mid, left_info, depth + 1, at + 1);
+    node.offset = static_cast<std::uint32_t>(at + 1 + left_nodes);
+    return 1 + left_nodes + build(mid, end, right_info, depth + 1, at + 1 + left_nodes);
+  }
+
   // Runs `body(b, e)` over fixed chunks of [begin, end) and folds the results in chunk order. The chunks
   // do not depend on the thread count, and every fold used here (min, max, integer sums) is exact, so the
   // result is the same serial or parallel. Large ranges run in TBB tasks when the build is parallel: the
@@ -381,15 +521,16 @@ class Builder {
     return acc;
   }
 
-  static void append_rebased(const std::vector<BvhNode>& subtree, std::vector<BvhNode>& out) {
-    const auto base = static_cast<std::uint32_t>(out.size());
-    for (BvhNode node : subtree) {
-      if (!node.is_leaf()) node.offset += base;
-      out.push_back(node);
-    }
+  // Runs `body(b, e)` over the fixed chunks of [begin, end), in parallel when the build is.
+  template <class Body>
+  void for_chunks(std::size_t begin, std::size_t end, const Body& body) const {
+    const std::size_t chunks = (end - begin + kRangeChunk - 1) / kRangeChunk;
+    const auto run = [&](std::size_t c) { body(begin + c * kRangeChunk, std::min(end, begin + (c + 1) * kRangeChunk)); };
+    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, run);
+    else for (std::size_t c = 0; c < chunks; ++c) run(c);
   }
 
-  Split choose_split(std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
+  Split choose_split(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
                      std::size_t depth, bool mixed, std::uint32_t second_kind) const {
     const std::size_t n = end - begin;
     const bool fits_leaf = n <= static_cast<std::size_t>(o_.max_leaf_size);
@@ -411,23 +552,17 @@ class Builder {
     // every plane's cost finite, as the sweep needs it to be for "a plane exists" to mean "a split exists".
     constexpr float kFiniteCostArea = 1e35f;  // x 2 sides x at most 255 tests, far below FLT_MAX
     if (fits_leaf && leaf_cost <= o_.traversal_cost && area <= kFiniteCostArea) {
-      if (has_binned_plane(begin, end, centroids)) return {};
+      if (has_binned_plane(refs, begin, end, centroids)) return {};
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     }
 
-    Split best = best_binned_split(begin, end, centroids, second_kind);
+    Split best = best_binned_split(refs, begin, end, centroids, second_kind);
     if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     // Compare with stopping here: both costs per unit of this node's area.
     const float split_cost = area > 0.0f ? o_.traversal_cost + o_.intersection_cost * best.cost / area : INFINITY;
     if (fits_leaf && leaf_cost <= split_cost) return {};
     return best;
-  }
-
-  // Bin index of a centroid coordinate; clamped because c == hi maps to `bins` (and rounding may overshoot).
-  static int bin_of(float c, float lo, float scale, int bins) {
-    const int b = static_cast<int>((c - lo) * scale);
-    return std::clamp(b, 0, bins - 1);
   }
 
   // The mapping of centroids to bins on every axis, and which axes are usable: an extent of zero or one too
@@ -446,14 +581,14 @@ class Builder {
 
   // Whether best_binned_split() would find a plane: on some usable axis the primitives fall in at least
   // two bins (then the first of them has a plane after it, with both sides non-empty).
-  bool has_binned_plane(std::size_t begin, std::size_t end, const Bounds3& centroids) const {
+  bool has_binned_plane(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids) const {
     std::array<bool, 3> usable{};
     const BinMapping map = bin_mapping(centroids, usable);
     alignas(16) std::int32_t first[4], k[4];
     __m128 lo, hi;
-    map.bins_of(refs_[begin], lo, hi, first);
+    map.bins_of(refs[begin], lo, hi, first);
     for (std::size_t i = begin + 1; i < end; ++i) {
-      map.bins_of(refs_[i], lo, hi, k);
+      map.bins_of(refs[i], lo, hi, k);
       for (std::size_t axis = 0; axis < 3; ++axis)
         if (usable[axis] && k[axis] != first[axis]) return true;
     }
@@ -463,18 +598,19 @@ class Builder {
   // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
   // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
   // as in leaf_tests.
-  Split best_binned_split(std::size_t begin, std::size_t end, const Bounds3& centroids, std::uint32_t second_kind) const {
+  Split best_binned_split(const PrimRef* range_refs, std::size_t begin, std::size_t end, const Bounds3& centroids,
+                          std::uint32_t second_kind) const {
     std::array<bool, 3> usable{};
     const BinMapping map = bin_mapping(centroids, usable);
     const int bins = o_.bins;
-    const std::span<const PrimRef> refs(refs_);
+    const std::span<const PrimRef> refs(range_refs, end);
     BinGrid grid;
     if (!o_.parallel || end - begin < kParallelRangeGrain) {
-      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0);
+      bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0, avx2_);
     } else {
       grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
         BinGrid g;
-        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0);
+        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0, avx2_);
         return g;
       }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
     }
@@ -520,28 +656,36 @@ class Builder {
     return best;
   }
 
-  // Splits refs_[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
-  // chunks (count, then scatter through a buffer), small ones in place; the choice depends on the size
-  // only, so serial and parallel builds stay identical.
-  std::size_t partition(std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split,
-                        RangeInfo& left, RangeInfo& right) const {
-    PrimRef* first = refs_.data() + begin;
-    PrimRef* last = refs_.data() + end;
+  // Splits refs[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
+  // chunks (count, then scatter into the other array: `in_scratch` flips), small ones in place; the
+  // choice depends on the size only, so serial and parallel builds stay identical.
+  std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split,
+                        RangeInfo& left, RangeInfo& right, bool& in_scratch) const {
+    PrimRef* first = refs + begin;
+    PrimRef* last = refs + end;
     std::size_t mid = end;
     switch (split.kind) {
       case Split::Kind::Bin: {
+        // A primitive goes left when its bin on the split axis, computed as the binning did (same mapping,
+        // BinMapping::bins_of), is below the plane: all three lanes at once, then the split axis's bit.
+        std::array<bool, 3> usable{};
+        const BinMapping map = bin_mapping(centroids, usable);
+        const __m128i plane = _mm_set1_epi32(split.bin);
         const int axis = split.axis;
-        const float lo = centroids.lo[axis];
-        const float scale = static_cast<float>(o_.bins) / (centroids.hi[axis] - lo);
-        const int bins = o_.bins;
-        // The centroid's coordinate exactly as PrimRef::centroid() computes it.
-        const auto goes_left = [&](const PrimRef& r) { return bin_of(0.5f * (r.lo[axis] + r.hi[axis]), lo, scale, bins) < split.bin; };
-        if (end - begin >= kParallelRangeGrain) return partition_in_chunks(begin, end, goes_left, left, right);
-        return partition_in_place(begin, end, goes_left, left, right);
+        const auto goes_left = [&](const PrimRef& r) {
+          const __m128i below = _mm_cmplt_epi32(map.bins_of(r.lo4(), r.hi4()), plane);
+          return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
+        };
+        if (end - begin >= kParallelRangeGrain) {
+          PrimRef* const to = in_scratch ? home_ : scratch_;
+          in_scratch = !in_scratch;
+          return partition_in_chunks(refs, to, begin, end, goes_left, left, right);
+        }
+        return partition_in_place(refs, begin, end, goes_left, left, right);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
-            std::stable_partition(first, last, [&](const PrimRef& r) { return r.id < second_kind_begin_; }) - refs_.data());
+            std::stable_partition(first, last, [&](const PrimRef& r) { return r.id < second_kind_begin_; }) - refs);
         break;
       case Split::Kind::ObjectMedian: {
         // Ties broken by id, so the split (and the whole tree) does not depend on the partition algorithm.
@@ -551,25 +695,25 @@ class Builder {
           const float ca = a.centroid()[axis], cb = b.centroid()[axis];
           return ca != cb ? ca < cb : a.id < b.id;
         });
-        mid = static_cast<std::size_t>(median - refs_.data());
+        mid = static_cast<std::size_t>(median - refs);
         break;
       }
       case Split::Kind::None: break;
     }
-    left = info_of(begin, mid);
-    right = info_of(mid, end);
+    left = info_of(refs, begin, mid);
+    right = info_of(refs, mid, end);
     return mid;
   }
 
   // Hoare partition that describes both sides on the way: every primitive is classified once and folded
   // into the side it ends on, so a small node needs one pass over its primitives instead of three.
   template <class Pred>
-  std::size_t partition_in_place(std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
+  std::size_t partition_in_place(PrimRef* refs, std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
                                  RangeInfo& right) const {
     left = RangeInfo{};
     right = RangeInfo{};
-    PrimRef* lo = refs_.data() + begin;
-    PrimRef* hi = refs_.data() + end;
+    PrimRef* lo = refs + begin;
+    PrimRef* hi = refs + end;
     for (;;) {
       while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin_);
       while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin_);
@@ -579,12 +723,14 @@ class Builder {
       left.add(*lo++, second_kind_begin_);
       right.add(*hi, second_kind_begin_);
     }
-    return static_cast<std::size_t>(lo - refs_.data());
+    return static_cast<std::size_t>(lo - refs);
   }
 
+  // Stable partition of from[begin, end) into to[begin, end), in fixed chunks: count each chunk's sides,
+  // then scatter each chunk to where its sides start.
   template <class Pred>
-  std::size_t partition_in_chunks(std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
-                                  RangeInfo& right) const {
+  std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const Pred& goes_left,
+                                  RangeInfo& left, RangeInfo& right) const {
     const std::size_t n = end - begin;
     const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
     struct Part {
@@ -592,96 +738,78 @@ class Builder {
       RangeInfo left, right;
     };
     std::vector<Part> parts(chunks);
-    const auto chunk_range = [&](std::size_t c) {
-      return std::pair{begin + c * kRangeChunk, std::min(end, begin + (c + 1) * kRangeChunk)};
-    };
-    const auto count = [&](std::size_t c) {
-      const auto [b, e] = chunk_range(c);
-      Part& p = parts[c];
+    const auto chunk_of = [&](std::size_t b) { return (b - begin) / kRangeChunk; };
+    for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
+      Part& p = parts[chunk_of(b)];
       for (std::size_t i = b; i < e; ++i) {
-        if (goes_left(refs_[i])) {
+        if (goes_left(from[i])) {
           ++p.lefts;
-          p.left.add(refs_[i], second_kind_begin_);
+          p.left.add(from[i], second_kind_begin_);
         } else {
-          p.right.add(refs_[i], second_kind_begin_);
+          p.right.add(from[i], second_kind_begin_);
         }
       }
-    };
-    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, count);
-    else for (std::size_t c = 0; c < chunks; ++c) count(c);
+    });
 
     std::vector<std::size_t> left_at(chunks), right_at(chunks);
     std::size_t lefts = 0;
     for (std::size_t c = 0; c < chunks; ++c) lefts += parts[c].lefts;
-    std::size_t l = 0, r = lefts;
+    std::size_t l = begin, r = begin + lefts;
     left = RangeInfo{};
     right = RangeInfo{};
     for (std::size_t c = 0; c < chunks; ++c) {
       left_at[c] = l;
       right_at[c] = r;
       l += parts[c].lefts;
-      r += (chunk_range(c).second - chunk_range(c).first) - parts[c].lefts;
+      r += std::min(kRangeChunk, n - c * kRangeChunk) - parts[c].lefts;
       left.merge(parts[c].left);
       right.merge(parts[c].right);
     }
-    std::vector<PrimRef> buffer(n);
-    const auto scatter = [&](std::size_t c) {
-      const auto [b, e] = chunk_range(c);
-      std::size_t li = left_at[c], ri = right_at[c];
-      for (std::size_t i = b; i < e; ++i) buffer[goes_left(refs_[i]) ? li++ : ri++] = refs_[i];
-    };
-    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, scatter);
-    else for (std::size_t c = 0; c < chunks; ++c) scatter(c);
-    const auto copy_back = [&](std::size_t c) {
-      const auto [b, e] = chunk_range(c);
-      std::copy(buffer.begin() + static_cast<std::ptrdiff_t>(b - begin), buffer.begin() + static_cast<std::ptrdiff_t>(e - begin),
-                refs_.begin() + static_cast<std::ptrdiff_t>(b));
-    };
-    if (o_.parallel) tbb::parallel_for(std::size_t{0}, chunks, copy_back);
-    else for (std::size_t c = 0; c < chunks; ++c) copy_back(c);
+    for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
+      std::size_t li = left_at[chunk_of(b)], ri = right_at[chunk_of(b)];
+      for (std::size_t i = b; i < e; ++i) to[goes_left(from[i]) ? li++ : ri++] = from[i];
+    });
     return begin + lefts;
   }
 
-  std::span<PrimRef> refs_;
+  PrimRef* home_;                   // every range's primitives, except large ranges in the scratch array
+  PrimRef* scratch_ = nullptr;      // the other array of large ranges' scatters (none for a small input)
+  std::unique_ptr<PrimRef[]> scratch_owner_;  // freed between build_tree()'s two phases
+  BvhNode* nodes_;
   std::uint32_t second_kind_begin_;
   const BvhBuildOptions& o_;
+  bool avx2_;  // large ranges are binned by bin_range_avx2
 };
-
-void measure(const std::vector<BvhNode>& nodes, std::size_t index, std::size_t depth, BvhTree& tree) {
-  tree.max_depth = std::max(tree.max_depth, depth);
-  const BvhNode& node = nodes[index];
-  if (node.is_leaf()) {
-    ++tree.leaves;
-    return;
-  }
-  measure(nodes, index + 1, depth + 1, tree);
-  measure(nodes, node.second_child(), depth + 1, tree);
-}
 
 }  // namespace
 
-BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options) {
+BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options, Isa isa) {
   validate(options);
   BvhTree tree;
   if (bounds.empty()) return tree;
-  std::vector<PrimRef> refs(bounds.size());
+  const std::size_t n = bounds.size();
+  // Uninitialised (PrimRef is trivially constructible): every element is written right below.
+  const std::unique_ptr<PrimRef[]> ref_storage(new PrimRef[n]);
+  const std::span<PrimRef> refs(ref_storage.get(), n);
   const auto make_refs = [&](std::size_t b, std::size_t e) {
-    for (std::size_t i = b; i < e; ++i) refs[i] = PrimRef{bounds[i].lo, static_cast<std::uint32_t>(i), bounds[i].hi};
+    for (std::size_t i = b; i < e; ++i) refs[i] = PrimRef{bounds[i].lo, static_cast<std::uint32_t>(i), bounds[i].hi, 0.0f};
   };
-  if (options.parallel && refs.size() >= kParallelRangeGrain)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, refs.size(), kRangeChunk),
+  if (options.parallel && n >= kParallelRangeGrain)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kRangeChunk),
                       [&](const tbb::blocked_range<std::size_t>& r) { make_refs(r.begin(), r.end()); });
   else
-    make_refs(0, refs.size());
+    make_refs(0, n);
 
-  tree.nodes.reserve(2 * bounds.size());
-  const Builder builder(refs, second_kind_begin, options);
-  builder.build(0, refs.size(), builder.info_of(0, refs.size()), 0, tree.nodes);
-  tree.nodes.shrink_to_fit();
+  // Uninitialised: build() writes every node it reports, and only those are read.
+  static_assert(std::is_trivially_default_constructible_v<BvhNode>, "new[] must not initialise the nodes");
+  const std::unique_ptr<BvhNode[]> nodes(new BvhNode[2 * refs.size() - 1]);
+  Builder builder(refs, nodes.get(), second_kind_begin, options, isa);
+  const std::size_t node_count = builder.build_tree(n, builder.info_of(refs.data(), 0, n));
+  tree.nodes.reserve(node_count);
+  builder.compact(0, 0, tree);
 
   tree.prim_order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) tree.prim_order[i] = refs[i].id;
-  measure(tree.nodes, 0, 0, tree);
   tree.sah_cost = sah_cost(tree.nodes, options);
   return tree;
 }

@@ -5,6 +5,7 @@
 
 #include "backends/bvh/bvh_build_options.h"
 #include "backends/bvh/bvh_node.h"
+#include "backends/simd/isa.h"
 #include "core/geometry/bounds.h"
 
 #include <cstddef>
@@ -27,8 +28,10 @@ struct BvhTree {
 // Builds a tree over `bounds` (primitive id = index). Primitives with id >= second_kind_begin are of a
 // second kind (spheres after triangles) and never share a leaf with the first kind; a leaf whose
 // primitives are of the second kind is marked with BvhNode::kSphereLeafBit. An empty input gives an empty
-// tree (no nodes). Deterministic: the same input and options give the same tree, parallel or not.
-BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options);
+// tree (no nodes). Deterministic: the same input and options give the same tree, parallel or not, on
+// every instruction set: `isa` only picks the kernel that bins large ranges (AVX2 or SSE2).
+BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_begin, const BvhBuildOptions& options,
+                  Isa isa = selected_isa());
 
 // SAH cost of a finished tree: traversal_cost per interior node and intersection_cost per primitive of a
 // leaf, each weighted by the node's surface area relative to the root's.

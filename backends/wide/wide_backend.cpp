@@ -20,7 +20,7 @@ WideBackend::WideBackend(const WideBuildOptions& options, std::optional<Isa> isa
 void WideBackend::build(const SceneGeometry& geometry) {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n_triangles = geometry.triangle_count();
-  const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary);
+  const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary, isa_);
   WideTree tree = collapse_to_wide(binary, options_.collapse);
 
   // Leaves are gathered in the order the nodes name them, so siblings' primitives are neighbours too.

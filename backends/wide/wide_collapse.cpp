@@ -6,8 +6,10 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace twinray {
 
@@ -26,17 +28,21 @@ constexpr int kW = kWideWidth;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // What the dynamic program decided for one binary node.
+// Plan and Subtree have no member initialisers: one of each per binary node is allocated uninitialised
+// and evaluate() writes every member (clearing them cost more than the rest of the allocation).
 struct Plan {
-  std::array<float, kW + 1> cost{};     // cost[j], j = 1..kW: as at most j slots
-  std::array<std::uint8_t, kW + 1> k{};  // j >= 2: left gets k slots; 0: cost[j] = cost[j - 1]
-  bool leaf = false;                     // as one slot: a leaf (else a wide node)
+  std::array<float, kW + 1> cost;     // cost[j], j = 1..kW: as at most j slots (cost[0] = inf, never used)
+  std::array<std::uint8_t, kW + 1> k;  // j >= 2: left gets k slots; 0: cost[j] = cost[j - 1]
+  bool leaf;                           // as one slot: a leaf (else a wide node)
 };
 
 struct Subtree {
-  std::uint32_t first = 0, count = 0;  // range of prim_order
-  bool triangles = false, spheres = false;
-  float area = 0.0f;
+  std::uint32_t first, count;  // range of prim_order
+  bool triangles, spheres;
+  float area;
 };
+static_assert(std::is_trivially_default_constructible_v<Plan> && std::is_trivially_default_constructible_v<Subtree>,
+              "new[] must not initialise them");
 
 class Collapser {
  public:
@@ -53,8 +59,8 @@ class Collapser {
       if (root_volume > 0.0) volume_weight_ = double(o_.volume_cost) * double(root_area) / root_volume;
       if (!std::isfinite(volume_weight_)) volume_weight_ = 0.0;
     }
-    sub_.resize(n);
-    plan_.resize(n);
+    sub_.reset(new Subtree[n]);
+    plan_.reset(new Plan[n]);
     // Children come after their parent in the depth-first array: a reverse sweep sees them first.
     for (std::size_t i = n; i-- > 0;) evaluate(static_cast<std::uint32_t>(i));
 
@@ -92,6 +98,7 @@ class Collapser {
       p.leaf = true;
       p.cost.fill(leaf_cost(s));
       p.cost[0] = kInf;
+      p.k.fill(0);  // distribute() stops at j = 1
       return;
     }
     const Subtree& l = sub_[i + 1];
@@ -119,6 +126,8 @@ class Collapser {
     const float as_leaf = may_be_leaf ? leaf_cost(s) : kInf;
     const float as_node = o_.node_cost * s.area + split[kW];
     p.leaf = as_leaf <= as_node;
+    p.cost[0] = kInf;
+    p.k[0] = 0;
     p.cost[1] = std::min(as_leaf, as_node);
     for (int j = 2; j <= kW; ++j) {
       if (p.cost[j - 1] <= split[j]) {
@@ -149,11 +158,17 @@ class Collapser {
     return plan_[i + 1].cost[k] + plan_[bin_.nodes[i].second_child()].cost[j - k];
   }
 
+  // At most kW binary nodes, the slots of one wide node (no allocation per node).
+  struct Slots {
+    std::array<std::uint32_t, kW> node;
+    int count = 0;
+  };
+
   // The binary nodes that become the slots of subtree i handed over as at most j slots.
-  void distribute(std::uint32_t i, int j, std::vector<std::uint32_t>& slots) const {
+  void distribute(std::uint32_t i, int j, Slots& slots) const {
     while (j > 1 && plan_[i].k[j] == 0) --j;
     if (j == 1) {
-      slots.push_back(i);
+      slots.node[static_cast<std::size_t>(slots.count++)] = i;
       return;
     }
     const int k = plan_[i].k[j];
@@ -191,21 +206,21 @@ class Collapser {
   // contiguous in the array (one node's children are fetched from neighbouring lines).
   void emit(std::uint32_t i, std::uint32_t w, std::size_t depth) {
     out_->max_depth = std::max(out_->max_depth, depth);
-    std::vector<std::uint32_t> slots;
-    slots.reserve(kW);
+    Slots slots;
     const int k = plan_[i].k[1];
     distribute(i + 1, k, slots);
     distribute(bin_.nodes[i].second_child(), kW - k, slots);
     // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
-    std::stable_sort(slots.begin(), slots.end(), [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
+    std::stable_sort(slots.node.begin(), slots.node.begin() + slots.count,
+                     [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
 
     init_empty(out_->nodes[w]);
     std::array<std::uint32_t, kW> inner{};
     std::array<int, kW> inner_slot{};
     int n_inner = 0;
-    for (int s = 0; s < static_cast<int>(slots.size()); ++s)
-      if (set_slot(w, s, slots[static_cast<std::size_t>(s)], depth)) {
-        inner[static_cast<std::size_t>(n_inner)] = slots[static_cast<std::size_t>(s)];
+    for (int s = 0; s < slots.count; ++s)
+      if (set_slot(w, s, slots.node[static_cast<std::size_t>(s)], depth)) {
+        inner[static_cast<std::size_t>(n_inner)] = slots.node[static_cast<std::size_t>(s)];
         inner_slot[static_cast<std::size_t>(n_inner++)] = s;
       }
     const auto base = static_cast<std::uint32_t>(out_->nodes.size());
@@ -217,8 +232,8 @@ class Collapser {
 
   const BvhTree& bin_;
   const WideCollapseOptions& o_;
-  std::vector<Subtree> sub_;
-  std::vector<Plan> plan_;
+  std::unique_ptr<Subtree[]> sub_;  // per binary node, all written by evaluate()
+  std::unique_ptr<Plan[]> plan_;
   WideTree* out_ = nullptr;
   float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
   double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume
