@@ -3,7 +3,7 @@
 #include "backends/plugin/plugin_failure.h"
 #include "cli/commands.h"
 #include "core/util/input_error.h"
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 
 #include <fmt/core.h>
 
@@ -44,16 +44,16 @@ int main(int argc, char** argv) {
   } catch (const twinray::PluginFailure& e) {
     // The plugin under test crashed, hung or broke the contract: a failed check, not bad input. Its words
     // (name, exception text) and what it printed reach the terminal without their control characters.
-    fmt::print(stderr, "twinray: error: {}\n", twinray::grade::one_line(e.what()));
+    fmt::print(stderr, "twinray: error: {}\n", twinray::one_line(e.what()));
     if (!e.output.empty())
-      fmt::print(stderr, "plugin output (stdout and stderr):\n{}\n", twinray::grade::printable_lines(e.output));
+      fmt::print(stderr, "plugin output (stdout and stderr):\n{}\n", twinray::printable_lines(e.output));
     return kExitCheckFailed;
   } catch (const twinray::PluginBuildError& e) {
     // The plugin declined the scene: the plugin under test failed, the input is fine.
-    fmt::print(stderr, "twinray: error: {}\n", twinray::grade::one_line(e.what()));
+    fmt::print(stderr, "twinray: error: {}\n", twinray::one_line(e.what()));
     return kExitCheckFailed;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "twinray: error: {}\n", twinray::grade::one_line(e.what()));
+    fmt::print(stderr, "twinray: error: {}\n", twinray::one_line(e.what()));
     return kExitBadInput;
   }
 }

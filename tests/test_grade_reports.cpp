@@ -3,7 +3,7 @@
 // XML against an XSD of the common JUnit format (xmllint), with the strings a plugin can inject.
 
 #include "harness/grade/reports.h"
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 #include "tests/format_validators.h"
 
 #include <gtest/gtest.h>

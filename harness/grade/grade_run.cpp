@@ -8,7 +8,7 @@
 #include "harness/grade/grade_scene.h"
 #include "harness/grade/plugin_launcher.h"
 #include "harness/grade/suite.h"
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 
 #include <fmt/core.h>
 

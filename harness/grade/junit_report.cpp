@@ -3,7 +3,7 @@
 // check could not finish), a skipped check <skipped>; the detail and reproduce line in <system-out>.
 
 #include "harness/grade/reports.h"
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 
 #include <fmt/core.h>
 

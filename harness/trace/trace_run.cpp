@@ -5,7 +5,7 @@
 #include "core/util/float_ulps.h"
 #include "core/util/fp_mode.h"
 #include "core/util/input_error.h"
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 #include "harness/crosscheck/hit_comparison.h"
 #include "harness/scenes/named_scene.h"
 #include "core/geometry/ray_text.h"
@@ -132,7 +132,7 @@ TraceReport run_trace(const TraceSettings& settings) {
     } catch (const std::exception& e) {
       // A backend that fails (a plugin's crash, timeout or contract violation) is an answer too, in one safe
       // line: the message may carry the plugin's own words.
-      a.error = grade::one_line(e.what());
+      a.error = one_line(e.what());
       report.all_answered = false;
     }
     answers.push_back(std::move(a));

@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-namespace twinray::grade {
+namespace twinray {
 
 // `text` with every invalid UTF-8 sequence replaced by U+FFFD.
 std::string valid_utf8(std::string_view text);
@@ -26,4 +26,4 @@ std::string one_line(std::string_view text);
 // (and still cannot move the cursor, clear the screen or change colours).
 std::string printable_lines(std::string_view text);
 
-}  // namespace twinray::grade
+}  // namespace twinray

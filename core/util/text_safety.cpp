@@ -1,8 +1,8 @@
-#include "harness/grade/text_safety.h"
+#include "core/util/text_safety.h"
 
 #include <cstdint>
 
-namespace twinray::grade {
+namespace twinray {
 
 namespace {
 constexpr std::string_view kReplacement = "\xEF\xBF\xBD";  // U+FFFD
@@ -104,4 +104,4 @@ std::string one_line(std::string_view text) { return escape_controls(text, ""); 
 
 std::string printable_lines(std::string_view text) { return escape_controls(text, "\n\t"); }
 
-}  // namespace twinray::grade
+}  // namespace twinray
