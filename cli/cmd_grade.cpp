@@ -30,6 +30,7 @@ struct GradeOptions {
   std::string junit;
   std::string out;
   std::optional<double> time_budget;
+  double time_scale = 1.0;
   bool list = false;
 };
 
@@ -76,6 +77,9 @@ int run_grade_command(const GradeOptions& opt) {
       return report_bad_input("grade", "--time-budget is a number of seconds from 0 (no budget) to 86400");
     settings.time_budget = opt.time_budget;
   }
+  if (!(opt.time_scale > 0.0) || opt.time_scale > 100.0)
+    return report_bad_input("grade", "--time-scale is a factor greater than 0 and at most 100");
+  settings.time_scale = opt.time_scale;
 
   // The header once the suite and plugin are loaded; check lines on stdout as they finish, the progress line
   // (stderr, terminals only) cleared before each.
@@ -132,6 +136,10 @@ void add_grade_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--time-budget", opt->time_budget,
                   "Seconds for the whole run, overriding the suite's time_budget (0: none); once spent, the checks\n"
                   "still to run are reported timeout without running");
+  cmd->add_option("--time-scale", opt->time_scale,
+                  "Multiply every check's time limits and the suite's time_budget by this factor (0 < F <= 100), for a\n"
+                  "slower or busier grading machine; reproduce lines repeat it")
+      ->capture_default_str();
   cmd->add_flag("--list", opt->list, "List the suite's checks and exit");
   cmd->callback([opt, &run] { run = [opt] { return run_grade_command(*opt); }; });
 }

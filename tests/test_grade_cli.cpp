@@ -74,6 +74,23 @@ TEST(GradeCli, TimeBudgetEndsTheRunWithCompleteValidOutputs) {
   EXPECT_EQ(ju.exit_code, 0) << ju.output;
 }
 
+// --time-scale multiplies the suite's limits (the test suite's time_limit is 4 s): a build that never returns
+// is cut after 0.1 x 4 s, the scorecard says so, and the reproduce line replays under the same limits.
+TEST(GradeCli, TimeScaleMultipliesTheSuitesLimits) {
+  const auto dir = scratch_dir("grade-cli-time-scale");
+  const CommandResult r = run_twinray(grade_args(TWINRAY_TEST_HOSTILE_BUILD_LOOP_PLUGIN,
+                                                 "--check build-empty --time-scale 0.1 --json " + quoted(dir / "card.json")));
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("time limits x 0.1"), std::string::npos) << r.output;
+  const nlohmann::json card = read_json_file(dir / "card.json");
+  EXPECT_EQ(card.at("time_scale"), 0.1);
+  const nlohmann::json& check = card.at("checks").at(0);
+  EXPECT_EQ(check.at("outcome"), "timeout") << check.dump();
+  // 0.4 s scaled against 4 s unscaled: 3 s leaves room for starting the worker on a busy machine.
+  EXPECT_LT(check.at("seconds").get<double>(), 3.0) << check.dump();
+  EXPECT_NE(check.at("reproduce").get<std::string>().find("--time-scale 0.1"), std::string::npos) << check.dump();
+}
+
 TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
   const auto dir = scratch_dir("grade-cli-bad");
   const std::string outputs = "--json " + quoted(dir / "card.json") + " --gradescope " + quoted(dir / "results.json") +
@@ -86,6 +103,7 @@ TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
       {"grade " + quoted(std::filesystem::path(TWINRAY_TEST_WRONG_ABI_PLUGIN)) + " --suite quick " + outputs, "ABI"},
       {grade_args(scotty_plugin(), "--json " + quoted(dir / "missing-folder" / "card.json")), "missing-folder"},
       {grade_args(scotty_plugin(), "--time-budget -1 " + outputs), "--time-budget"},
+      {grade_args(scotty_plugin(), "--time-scale 0 " + outputs), "--time-scale"},
   };
   for (const auto& [args, words] : cases) {
     const CommandResult r = run_twinray(args);

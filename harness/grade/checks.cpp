@@ -52,8 +52,9 @@ std::string CheckContext::grade_command() const { return grade::grade_command(en
 
 std::string grade_command(const CheckEnvironment& env, const CheckSpec& spec) {
   const std::string suite = env.suite.bundled ? env.suite.name : env.suite.dir.string();
-  return fmt::format("{} grade {} --suite {} --check {}", shell_quote(env.twinray), shell_quote(env.plugin.path().string()),
-                     shell_quote(suite), shell_quote(spec.name));
+  return fmt::format("{} grade {} --suite {} --check {}{}", shell_quote(env.twinray), shell_quote(env.plugin.path().string()),
+                     shell_quote(suite), shell_quote(spec.name),
+                     env.time_scale == 1.0 ? std::string() : fmt::format(" --time-scale {:g}", env.time_scale));
 }
 
 std::vector<Ray> CheckContext::rays_of_kinds(const std::vector<crosscheck::RayKind>& fallback, std::size_t count) const {

@@ -25,6 +25,7 @@ struct CheckEnvironment {
   const PluginLauncher& plugin;
   std::string twinray = "twinray";  // how reproduce lines start the program (the running executable's path)
   bool images = false;               // render disagreement images (CheckVerdict::image)
+  double time_scale = 1.0;           // --time-scale, repeated in reproduce lines when it is not 1
 };
 
 struct CheckContext {

@@ -116,7 +116,14 @@ std::vector<const CheckSpec*> selected_checks(const Suite& suite, const std::vec
 Scorecard run_grade(const GradeSettings& settings) {
   const auto start = Clock::now();
   const ScopedFlushDenormals ftz;  // the mode every command queries backends in (core/util/fp_mode.h)
-  const Suite suite = load_suite(settings.suite);
+  Suite suite = load_suite(settings.suite);
+  if (settings.time_scale != 1.0) {
+    for (CheckSpec& c : suite.checks) {
+      c.time_limit_seconds *= settings.time_scale;
+      c.ray_time_limit_seconds *= settings.time_scale;
+    }
+    if (suite.time_budget_seconds) *suite.time_budget_seconds *= settings.time_scale;
+  }
   const std::vector<const CheckSpec*> checks = selected_checks(suite, settings.only);
   const PluginLauncher plugin(settings.plugin);
   const bool shared_data = find_shared_data(suite.dir).has_value();
@@ -127,6 +134,7 @@ Scorecard run_grade(const GradeSettings& settings) {
   card.claims = plugin.traits();
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();
+  card.time_scale = settings.time_scale;
   const std::optional<double> flag_budget = settings.time_budget;
   if (flag_budget) {
     if (*flag_budget > 0.0) card.time_budget = *flag_budget;
@@ -147,7 +155,7 @@ Scorecard run_grade(const GradeSettings& settings) {
   std::map<std::string, std::unique_ptr<GradeScene>> scenes;
   std::map<std::string, const CheckResult*> done;  // by name; points into card.checks (reserved below)
   card.checks.reserve(checks.size());
-  const CheckEnvironment env{suite, plugin, settings.twinray, !settings.image_dir.empty()};
+  const CheckEnvironment env{suite, plugin, settings.twinray, !settings.image_dir.empty(), settings.time_scale};
 
   for (std::size_t i = 0; i < checks.size(); ++i) {
     const CheckSpec& spec = *checks[i];

@@ -29,6 +29,10 @@ struct GradeSettings {
   std::string twinray = "twinray";         // the program name reproduce lines start with
   // Seconds for the whole run (--time-budget), overriding the suite's "time_budget"; 0: no budget.
   std::optional<double> time_budget;
+  // Multiplies every check's time_limit and ray_time_limit and the suite's time_budget (--time-scale): for a
+  // grading machine slower or busier than the one the suite was written on. An explicit --time-budget is
+  // taken as given. Reproduce lines carry it, so that a replay runs under the same limits.
+  double time_scale = 1.0;
   // Called once the suite and plugin are loaded, before the first check (the terminal header), then after
   // every check, in order (the terminal report streams its lines from here).
   std::function<void(const Scorecard& card, std::size_t total)> on_start;

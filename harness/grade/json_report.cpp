@@ -45,7 +45,8 @@ nlohmann::json scorecard_json(const Scorecard& card) {
                       {"timeout", card.count(Outcome::Timeout)},
                       {"skipped", card.count(Outcome::Skipped)}}},
           {"seconds", card.seconds},
-          {"time_budget", card.time_budget ? nlohmann::json(*card.time_budget) : nlohmann::json(nullptr)}};
+          {"time_budget", card.time_budget ? nlohmann::json(*card.time_budget) : nlohmann::json(nullptr)},
+          {"time_scale", card.time_scale}};
 }
 
 }  // namespace twinray::grade

@@ -54,6 +54,7 @@ struct Scorecard {
   nlohmann::json performance = nlohmann::json::object();  // figures of the performance and tree-quality checks
   double seconds = 0.0;
   std::optional<double> time_budget;  // seconds for the whole run (the suite's or --time-budget), if any
+  double time_scale = 1.0;            // --time-scale: what every time limit of the suite was multiplied by
   std::vector<PendingImage> images;
 
   double score() const;

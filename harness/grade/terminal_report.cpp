@@ -32,7 +32,8 @@ std::string outcome_label(const CheckResult& c) {
 }  // namespace
 
 std::string terminal_header(const Scorecard& card, std::size_t checks) {
-  const std::string budget = card.time_budget ? fmt::format(", time budget {:g} s", *card.time_budget) : "";
+  std::string budget = card.time_budget ? fmt::format(", time budget {:g} s", *card.time_budget) : "";
+  if (card.time_scale != 1.0) budget += fmt::format(", time limits x {:g}", card.time_scale);
   return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {}{})\n  the plugin claims: {}\n\n", card.plugin_name,
                      card.plugin, card.suite, checks, card.suite_path, budget, claims_text(card.claims));
 }
