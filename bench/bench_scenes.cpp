@@ -2,6 +2,7 @@
 
 #include "backends/registry.h"
 #include "harness/crosscheck/ray_generation.h"
+#include "core/scene/mesh_file.h"
 #include "core/scene/scene_loader.h"
 #include "core/util/fp_mode.h"
 
@@ -99,9 +100,7 @@ std::vector<BenchSceneSpec> scene_specs(std::size_t max_triangles, const std::op
       return std::any_of(specs.begin(), specs.end(), [&n](const BenchSceneSpec& s) { return s.name == n; });
     };
     for (int k = 2; taken(name); ++k) name = fmt::format("{}-{}", stem, k);
-    const std::string ext = path.extension().string();
-    const bool bare_mesh = ext == ".obj" || ext == ".OBJ" || ext == ".ply" || ext == ".PLY";
-    specs.push_back({name, bare_mesh ? "mesh" : "view", 0, path});
+    specs.push_back({name, is_mesh_file_extension(path) ? "mesh" : "view", 0, path});
   }
   return specs;
 }
