@@ -114,6 +114,9 @@ class Collapser {
     const Plan& pr = plan_[node.second_child()];
     for (int j = 2; j <= kW; ++j) {
       split[j] = kInf;
+      // A valid split even when no cost compares below infinity: coordinates near float's range give
+      // infinite or NaN areas, and k = 0 would send distribute() down the tree without end.
+      split_k[j] = 1;
       for (int k = 1; k < j; ++k) {
         const float c = pl.cost[k] + pr.cost[j - k];
         if (c < split[j]) {
@@ -125,7 +128,8 @@ class Collapser {
     const bool may_be_leaf = s.count <= static_cast<std::uint32_t>(o_.max_leaf_size) && !(s.triangles && s.spheres);
     const float as_leaf = may_be_leaf ? leaf_cost(s) : kInf;
     const float as_node = o_.node_cost * s.area + split[kW];
-    p.leaf = as_leaf <= as_node;
+    // may_be_leaf first: with infinite costs on both sides, a node of too many primitives must not become a leaf.
+    p.leaf = may_be_leaf && as_leaf <= as_node;
     p.cost[0] = kInf;
     p.k[0] = 0;
     p.cost[1] = std::min(as_leaf, as_node);
