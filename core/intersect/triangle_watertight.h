@@ -11,7 +11,10 @@
 // float results are exact negations. And fl(x*y) - fl(z*w) has the sign of x*y - z*w or is zero, because
 // rounding is monotonic. So a non-zero float edge function always has the exact sign, and only an exact 0
 // is ambiguous: then all three are recomputed in double, where products of floats are exact and the sign
-// of the difference is exact too.
+// of the difference is exact too. (Far out in float's range a product can overflow: an infinite edge
+// function still has the exact sign, and inf - inf = NaN takes the same double path, where the products are
+// in range. The decision is exact while the sheared coordinates are finite: vertices within about 2^125 of
+// the ray origin; stress case extreme-scale.)
 //
 // Edge ownership (never counted twice): the paper accepts a 0 edge function for both triangles of an edge.
 // We add a fill rule so that a ray exactly through a shared edge or vertex hits exactly one triangle of a

@@ -111,7 +111,7 @@ std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::u
       case 1: {  // in a coordinate plane: one component exactly +0 or -0
         dir = sample_uniform_sphere(next2(rng));
         dir[axis] = signed_zero(rng);
-        if (glm::dot(dir, dir) == 0.0f) continue;
+        if (dir == glm::vec3(0.0f)) continue;
         org = point_in(around, rng);
         break;
       }
@@ -139,18 +139,23 @@ namespace {
 
 // Area-weighted vertex normals keyed by position (bit for bit), over every mesh: meshes whose faces do not
 // share vertex indices (a box of six separate faces) still get one normal per corner, between its faces.
+// In double: the cross products of a scene at 1e-30 (about 1e-60) would be 0 in float, and of one at 1e30
+// would overflow.
 class VertexNormals {
  public:
   explicit VertexNormals(const SceneGeometry& g) {
     for (const TriangleMesh& m : g.meshes)
       for (const glm::uvec3& t : m.indices) {
-        const glm::vec3 n = glm::cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+        const glm::dvec3 p0(m.positions[t[0]]);
+        const glm::dvec3 n = glm::cross(glm::dvec3(m.positions[t[1]]) - p0, glm::dvec3(m.positions[t[2]]) - p0);
         for (int k = 0; k < 3; ++k) sums_[key(m.positions[t[k]])] += n;
       }
   }
+  // The unit normal at p, or 0 where the faces' normals cancel (or p is no vertex).
   glm::vec3 at(const glm::vec3& p) const {
     const auto it = sums_.find(key(p));
-    return it == sums_.end() ? glm::vec3(0.0f) : it->second;
+    if (it == sums_.end() || it->second == glm::dvec3(0.0)) return glm::vec3(0.0f);
+    return glm::vec3(glm::normalize(it->second));
   }
 
  private:
@@ -158,7 +163,7 @@ class VertexNormals {
   static Key key(const glm::vec3& p) {
     return {std::bit_cast<std::uint32_t>(p.x), std::bit_cast<std::uint32_t>(p.y), std::bit_cast<std::uint32_t>(p.z)};
   }
-  std::map<Key, glm::vec3> sums_;
+  std::map<Key, glm::dvec3> sums_;
 };
 
 }  // namespace
@@ -185,14 +190,13 @@ std::vector<Ray> watertight_rays(const Scene& scene, std::size_t count, std::uin
       case 1: dir = p0 - inside; break;                                 // exactly through a vertex
       case 2: dir = 0.5f * (p0 + p1) - inside; break;                   // through an edge's midpoint
       default: {  // from outside, at a vertex, along its normal: between all its faces, across none of them
-        const glm::vec3 n = normals.at(p0);
-        if (glm::dot(n, n) == 0.0f) continue;
-        const glm::vec3 out = glm::normalize(n);
+        const glm::vec3 out = normals.at(p0);
+        if (out == glm::vec3(0.0f)) continue;
         rays.push_back(make(p0 + reach * out, -out));
         continue;
       }
     }
-    if (glm::dot(dir, dir) == 0.0f) continue;
+    if (dir == glm::vec3(0.0f)) continue;
     rays.push_back(make(inside, dir));
   }
   return rays;
@@ -246,7 +250,7 @@ std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t s
     b = 0.1f + 0.7f * b;
     const glm::vec3 target = b[0] * mesh.positions[tri[0]] + b[1] * mesh.positions[tri[1]] + b[2] * mesh.positions[tri[2]];
     const glm::vec3 org = point_in(around, rng);
-    if (glm::dot(target - org, target - org) == 0.0f) continue;
+    if (target == org) continue;
     rays.push_back(make(org, target - org));
   }
   return rays;
