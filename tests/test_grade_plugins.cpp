@@ -273,6 +273,41 @@ TEST(GradePlugins, TimeBudgetCutsTheRunAndReportsTheRestAsTimeouts) {
   std::filesystem::remove_all(suite);
 }
 
+// A check's worker must end as a program that used the plugin ends: destroy(), then the plugin's exit handlers
+// and static destructors. A crash or hang there fails a check whose answers were right, with the outcome of
+// what happened (crash, timeout), a detail that says so, figure `teardown`, and a reproduce line that reruns
+// the check. Threads the plugin leaves running (a spinning pool) end with the worker and are no failure.
+TEST(GradePlugins, PluginThatDoesNotEndCleanlyFailsTheCheck) {
+  const std::filesystem::path suite = scratch_suite("teardown", R"({"suite": "teardown",
+    "defaults": {"time_limit": 10, "ray_time_limit": 1, "memory_limit_mib": 1024},
+    "scenes": {"empty": "procedural:empty"},
+    "checks": [{"name": "build-empty", "category": "build", "scene": "empty", "points": 1}]})");
+  struct Case {
+    const char* plugin;
+    Outcome outcome;
+    const char* words;
+  };
+  for (const Case& k : {Case{TWINRAY_TEST_HOSTILE_DESTROY_CRASH_PLUGIN, Outcome::Crash, "crashed with SIGSEGV in destroy"},
+                        Case{TWINRAY_TEST_HOSTILE_EXIT_HANDLER_CRASH_PLUGIN, Outcome::Crash, "crashed with SIGSEGV in destroy"},
+                        Case{TWINRAY_TEST_HOSTILE_EXIT_HANDLER_HANG_PLUGIN, Outcome::Timeout, "exit handlers"}}) {
+    const Scorecard card = grade_with(k.plugin, suite);
+    const CheckResult& c = check_named(card, "build-empty");
+    EXPECT_EQ(c.outcome, k.outcome) << k.plugin << ": " << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("probe rays answered right, but at the end of the check"), std::string::npos) << c.detail;
+    EXPECT_NE(c.detail.find(k.words), std::string::npos) << c.detail;
+    EXPECT_EQ(c.figures.at("teardown").at("outcome"), std::string(to_string(k.outcome))) << c.figures.dump();
+    EXPECT_NE(c.reproduce.find("--check build-empty"), std::string::npos) << c.reproduce;
+    EXPECT_FALSE(card.passed());
+  }
+  for (const char* clean : {TWINRAY_TEST_HOSTILE_SPIN_PLUGIN, TWINRAY_TEST_BRUTE_PLUGIN}) {
+    const Scorecard card = grade_with(clean, suite);
+    const CheckResult& c = check_named(card, "build-empty");
+    EXPECT_EQ(c.outcome, Outcome::Pass) << clean << ": " << terminal_check_line(c);
+    EXPECT_FALSE(c.figures.contains("teardown")) << c.figures.dump();
+  }
+  std::filesystem::remove_all(suite);
+}
+
 // A plugin that writes over the shared memory its worker answers through is stopped at the first answer the
 // worker cannot give, as a crash, rather than waited for until the check's time limit.
 TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {

@@ -1,5 +1,6 @@
 #include "harness/grade/checks.h"
 
+#include "backends/plugin/plugin_failure.h"
 #include "harness/grade/grade_rays.h"
 #include "core/geometry/ray_text.h"
 
@@ -10,11 +11,25 @@
 
 namespace twinray::grade {
 
-std::unique_ptr<Backend> CheckContext::built_plugin(double* build_seconds) const {
+void PluginInstance::end() {
+  if (!backend_) return;
+  try {
+    backend_->shutdown();
+  } catch (const PluginFailure&) {
+    // Only a failure no call has thrown reaches here (shutdown's contract): a crash after the last answer or
+    // in teardown. One that a call threw is the check's outcome already.
+    if (!ctx_->teardown) ctx_->teardown = std::current_exception();
+  } catch (...) {
+    // Anything else at teardown is not the plugin's to answer for, and a destructor must not throw.
+  }
+  backend_.reset();
+}
+
+PluginInstance CheckContext::built_plugin(double* build_seconds) const {
   const bool first = builds++ == 0;
   if (first && failed_builds != nullptr)
     if (std::optional<FailedBuild> f = failed_builds->recall(spec)) throw RecalledBuildFailure(std::move(*f));
-  std::unique_ptr<Backend> plugin = env.plugin.launch(limits());
+  std::unique_ptr<IsolatedPluginBackend> plugin = env.plugin.launch(limits());
   const auto start = std::chrono::steady_clock::now();
   const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   try {
@@ -24,7 +39,7 @@ std::unique_ptr<Backend> CheckContext::built_plugin(double* build_seconds) const
     throw;
   }
   if (build_seconds != nullptr) *build_seconds = seconds();
-  return plugin;
+  return PluginInstance(std::move(plugin), *this);
 }
 
 std::string CheckContext::reference_name() const {

@@ -28,6 +28,32 @@ struct CheckEnvironment {
   double time_scale = 1.0;           // --time-scale, repeated in reproduce lines when it is not 1
 };
 
+struct CheckContext;
+
+// One built instance of the plugin, in its own worker, for one check. Ending it ends the worker the way a
+// program that uses the BVH ends: destroy(), then the plugin's atexit handlers and static destructors
+// (IsolatedPluginBackend::shutdown). A crash or hang there, or a crash of a plugin thread after the last
+// answer, becomes the check's teardown failure (CheckContext::teardown). Checks end an instance as soon as
+// they have its answers, so that nothing the plugin left running (a spinning helper thread) runs while the
+// grader computes references, times them or judges. The destructor ends it too.
+class PluginInstance {
+ public:
+  PluginInstance(std::unique_ptr<IsolatedPluginBackend> backend, const CheckContext& ctx)
+      : backend_(std::move(backend)), ctx_(&ctx) {}
+  PluginInstance(PluginInstance&&) = default;
+  PluginInstance& operator=(PluginInstance&&) = delete;
+  ~PluginInstance() { end(); }
+
+  const Backend& operator*() const { return *backend_; }
+  const IsolatedPluginBackend* operator->() const { return backend_.get(); }
+  // Ends the worker; afterwards the instance answers nothing. Never throws.
+  void end();
+
+ private:
+  std::unique_ptr<IsolatedPluginBackend> backend_;
+  const CheckContext* ctx_;
+};
+
 struct CheckContext {
   const CheckSpec& spec;
   GradeScene& scene;
@@ -38,12 +64,14 @@ struct CheckContext {
   // False when the deadline is the suite's time_budget running out before the check's own time_limit.
   bool own_deadline = true;
   mutable int builds = 0;  // plugin builds started by this check
+  // The first failure of a plugin instance at its end (PluginInstance), if one had any: a PluginFailure.
+  mutable std::exception_ptr teardown = nullptr;
 
   LaunchLimits limits() const { return {deadline, spec.memory_limit_bytes, spec.ray_time_limit_seconds}; }
   // A fresh plugin instance, built on the check's scene. Throws RecalledBuildFailure instead when the same
   // build failed in an earlier check under limits no more generous (failed_builds.h); `build_seconds`, when
   // given, receives the wall-clock time of the build call.
-  std::unique_ptr<Backend> built_plugin(double* build_seconds = nullptr) const;
+  PluginInstance built_plugin(double* build_seconds = nullptr) const;
   // The built-in backend the check's answers are compared with.
   std::string reference_name() const;
   // `twinray trace SCENE --backends plugin:PATH,REFERENCE --ray '...'`: replays one ray.
