@@ -132,6 +132,8 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                            100.0 * static_cast<double>(j.wrong_total()) / static_cast<double>(answers), first.ray,
                            j.first_wrong_description);
     v.reproduce = ctx.trace_command(set.rays[first.ray]);
+    ctx.confirm_replay(v, set.rays[first.ray], first.any_hit, first.any_hit ? Hit{} : mine.hits[first.ray],
+                       first.any_hit && mine.occluded[first.ray] != 0);
   }
 
   if (set.image_width > 0 && ctx.env.images) {

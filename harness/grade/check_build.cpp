@@ -47,6 +47,7 @@ CheckVerdict run_build_check(CheckContext& ctx) {
     v.detail = fmt::format("{}, but {} of {} probe answers are wrong; first, ray {}: {}", built, j.wrong_total(),
                            2 * rays.size(), first.ray, j.first_wrong_description);
     v.reproduce = ctx.trace_command(rays[first.ray]);
+    ctx.confirm_replay(v, rays[first.ray], first.any_hit, mine.hits[first.ray], mine.occluded[first.ray] != 0);
   }
   return v;
 }

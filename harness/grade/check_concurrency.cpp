@@ -30,13 +30,6 @@ constexpr std::size_t kDefaultDeterminismRays = 10000;  // per kind
 // most of their length. Still several calls per thread, starting at different places.
 constexpr std::size_t kChunk = 2048;
 
-bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
-
-bool same_bits(const Hit& a, const Hit& b) {
-  return a.geom_id == b.geom_id && a.prim_id == b.prim_id && same_bits(a.t, b.t) && same_bits(a.u, b.u) &&
-         same_bits(a.v, b.v) && same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
-}
-
 struct Difference {
   std::size_t count = 0;
   std::optional<std::size_t> first;

@@ -50,6 +50,8 @@ CheckVerdict run_watertight_check(CheckContext& ctx) {
     v.detail = fmt::format("{} of {} rays leak through the closed mesh ({} closest-hit, {} any-hit misses); first, ray {}",
                            std::max(leaks_closest, leaks_any), judged, leaks_closest, leaks_any, *first);
     v.reproduce = ctx.trace_command(rays[*first]);
+    const bool closest_leak = !mine.hits[*first].found();
+    ctx.confirm_replay(v, rays[*first], !closest_leak, mine.hits[*first], mine.occluded[*first] != 0);
   }
   return v;
 }

@@ -1,6 +1,7 @@
 #include "harness/grade/checks.h"
 
 #include "backends/plugin/plugin_failure.h"
+#include "harness/grade/answers.h"
 #include "harness/grade/grade_rays.h"
 #include "core/geometry/ray_text.h"
 
@@ -40,6 +41,37 @@ PluginInstance CheckContext::built_plugin(double* build_seconds) const {
   }
   if (build_seconds != nullptr) *build_seconds = seconds();
   return PluginInstance(std::move(plugin), *this);
+}
+
+std::optional<CheckContext::AloneAnswer> CheckContext::answer_alone(const Ray& ray) const {
+  const std::exception_ptr kept = teardown;  // the replay's own end is not the check's
+  std::optional<AloneAnswer> answer;
+  try {
+    PluginInstance plugin = built_plugin();
+    AloneAnswer a;
+    (*plugin).intersect(ray, a.hit);
+    a.occluded = (*plugin).occluded(ray);
+    plugin.end();
+    answer = a;
+  } catch (const std::exception&) {
+    // A crash, a timeout or a failed build of the replay: it proves nothing about the check's failure.
+  }
+  teardown = kept;
+  return answer;
+}
+
+void CheckContext::confirm_replay(CheckVerdict& v, const Ray& ray, bool any_hit, const Hit& batch_hit,
+                                  bool batch_occluded) const {
+  const std::optional<AloneAnswer> alone = answer_alone(ray);
+  if (!alone) return;
+  const bool same = any_hit ? alone->occluded == batch_occluded : same_bits(alone->hit, batch_hit);
+  v.figures["replays_alone"] = same;
+  if (same) return;
+  v.detail += fmt::format(
+      "; asked alone (as the reproduce line asks it) the plugin answers {} instead: its answers depend on the rays "
+      "asked before (state kept between calls), so the reproduce line reruns the check",
+      any_hit ? (alone->occluded ? "occluded" : "not occluded") : describe_hit(alone->hit));
+  v.reproduce = grade_command();
 }
 
 std::string CheckContext::reference_name() const {

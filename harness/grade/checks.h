@@ -29,6 +29,7 @@ struct CheckEnvironment {
 };
 
 struct CheckContext;
+struct CheckVerdict;
 
 // One built instance of the plugin, in its own worker, for one check. Ending it ends the worker the way a
 // program that uses the BVH ends: destroy(), then the plugin's atexit handlers and static destructors
@@ -72,6 +73,21 @@ struct CheckContext {
   // build failed in an earlier check under limits no more generous (failed_builds.h); `build_seconds`, when
   // given, receives the wall-clock time of the build call.
   PluginInstance built_plugin(double* build_seconds = nullptr) const;
+  // The plugin's answers to `ray` asked alone, of a fresh instance built on the check's scene, the way the
+  // reproduce line's `twinray trace` asks them (closest hit, then any hit); nullopt when that replay fails
+  // (crashes, times out: within the check's own deadline) or cannot be made. A failure no single ray replays
+  // (an answer that depends on the rays asked before, memory that ran out over many calls) is reproduced by
+  // rerunning the check instead.
+  struct AloneAnswer {
+    Hit hit;
+    bool occluded = false;
+  };
+  std::optional<AloneAnswer> answer_alone(const Ray& ray) const;
+  // For a check that failed on a wrong answer, whose reproduce line traces `ray`: asks the ray alone
+  // (answer_alone) and, when the plugin then answers otherwise than it did among the check's rays (its
+  // `batch_hit`, or `batch_occluded` for an any-hit answer), says so in the detail and reruns the check as the
+  // reproduce line. Figure `replays_alone` records whether the ray alone gives the same answer.
+  void confirm_replay(CheckVerdict& v, const Ray& ray, bool any_hit, const Hit& batch_hit, bool batch_occluded) const;
   // The built-in backend the check's answers are compared with.
   std::string reference_name() const;
   // `twinray trace SCENE --backends plugin:PATH,REFERENCE --ray '...'`: replays one ray.

@@ -113,6 +113,14 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
     // concurrent calls, a crash is the race's, and tracing the ray it hit answers normally.
     const bool concurrent = ctx.spec.category == Category::ThreadSafety;
     r.reproduce = f.ray && !concurrent ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    // A crash on a ray that, traced alone, is answered normally needs the calls before it (memory that ran out
+    // over many calls, state kept between them): the check reproduces it, that ray does not.
+    if (f.outcome == Outcome::Crash && f.ray && !concurrent && ctx.answer_alone(*f.ray)) {
+      r.detail = one_line(f.detail) + "; traced alone that ray is answered normally: the crash needs the calls before "
+                                      "it, so the reproduce line reruns the check";
+      r.reproduce = ctx.grade_command();
+      r.figures["replays_alone"] = false;
+    }
     if (!f.output.empty()) r.figures["plugin_output"] = f.output;
   }
 }
