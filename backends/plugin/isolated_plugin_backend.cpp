@@ -39,6 +39,9 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kCallerSpin = std::chrono::microseconds(50);
 // How long twinray waits for a worker it has killed to be reaped (its output drained) before reporting.
 constexpr auto kReapWait = std::chrono::seconds(5);
+// How long a worker may take to end after the plugin's exit handlers have run (the C library's teardown, the
+// kernel unmapping a large address space on a busy machine), beyond one call's limit.
+constexpr auto kTeardownWait = std::chrono::seconds(10);
 // Added to every handshake word when the worker dies, so a caller about to sleep on it does not (see
 // on_worker_exit).
 constexpr std::uint32_t kDeathBump = 1u << 31;
@@ -866,14 +869,26 @@ void IsolatedPluginBackend::Impl::shutdown() {
     set_context(lease, RequestContext{true, Stage::Destroy, {}, nullptr, 0});
     clean_exit_expected_.store(true);
     post(lease);
-    // The worker answers a destroy by exiting; its exit status is the answer.
-    if (!worker_->wait_for_exit(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.query_seconds)))) {
+    // The worker answers a destroy by exiting; its exit status is the answer. The plugin's part (destroy(), its
+    // atexit handlers and static destructors) has one call's limit; the process's own end after that (the C
+    // library's, the kernel's unmapping of what may be gigabytes) a generous bound of its own.
+    const auto per_call = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.query_seconds));
+    const auto handlers_limit = Clock::now() + per_call;
+    std::atomic<std::uint32_t>& done = block_->header.crash.exit_handlers_done;
+    while (done.load() == 0 && worker_->running() && Clock::now() < handlers_limit)
+      pw::futex_wait(&done, 0, std::min<Clock::duration>(handlers_limit - Clock::now(), std::chrono::milliseconds(10)));
+    const bool handlers_ran = done.load() != 0 || !worker_->running();
+    if (!handlers_ran || !worker_->wait_for_exit(per_call + kTeardownWait)) {
       PluginFailureDetails d = base_details();
       d.kind = PluginFailureKind::Timeout;
       d.cause = "timeout";
       d.stage = "destroy";
-      d.detail = fmt::format("destroy() and the plugin's exit handlers and static destructors took longer than {} s",
-                             limits_.query_seconds);
+      d.detail = handlers_ran
+                     ? fmt::format("the worker did not end within {} s of the plugin's exit handlers (a destructor of "
+                                   "the library that never returns?)",
+                                   limits_.query_seconds + std::chrono::duration<double>(kTeardownWait).count())
+                     : fmt::format("destroy() and the plugin's exit handlers and static destructors took longer than {} s",
+                                   limits_.query_seconds);
       record_failure(d, static_cast<int>(lease.index()));
       end_worker();
     }

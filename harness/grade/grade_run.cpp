@@ -163,6 +163,7 @@ Scorecard run_grade(const GradeSettings& settings) {
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();
   card.time_scale = settings.time_scale;
+  card.time_calibration = settings.time_calibration;
   const std::optional<double> flag_budget = settings.time_budget;
   if (flag_budget) {
     if (*flag_budget > 0.0) card.time_budget = *flag_budget;

@@ -1,5 +1,7 @@
 #include "backends/plugin/worker/crash_recorder.h"
 
+#include "backends/plugin/futex.h"
+
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
@@ -46,7 +48,13 @@ void on_fatal_signal(int sig, siginfo_t* info, void*) {
 
 void on_exit_called() {
   const int saved_errno = errno;
-  if (g_clean_exit.load()) return;  // the worker's own exit after destroy (expect_clean_exit)
+  if (g_clean_exit.load()) {  // the worker's own exit after destroy (expect_clean_exit)
+    if (g_record != nullptr) {
+      g_record->exit_handlers_done.store(1);
+      futex_wake_all(&g_record->exit_handlers_done);
+    }
+    return;
+  }
   if (claim(kCrashExit)) {
     g_record->thread.store(t_role);
     if (saved_errno == ENOMEM) g_record->allocation_failed.store(1);
