@@ -91,7 +91,7 @@ std::vector<std::string> worker_environment(const PluginLimits& limits) {
     // handle_*=0: a plugin's SIGSEGV, SIGABRT... reach the worker's handler and end the worker with that
     //   signal, instead of ASan printing a report and exiting with its own code.
     // detect_leaks=0: LeakSanitizer stops the world with ptrace and a clone() without CLONE_THREAD at exit,
-    //   which the sandbox forbids; the worker ends with _exit anyway, and leaks of a plugin are not ours.
+    //   which the sandbox forbids (the worker ends with exit() after destroy), and leaks of a plugin are not ours.
     // allocator_may_return_null=1: an allocation over the memory limit returns NULL (errno ENOMEM) as glibc's
     //   malloc does, so it is reported as out-of-memory rather than as an ASan report.
     // soft_rss_limit_mb + can_use_proc_maps_statm=0: ASan's primary allocator serves small blocks from address
