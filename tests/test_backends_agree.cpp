@@ -74,8 +74,11 @@ TEST(BackendsAgree, BvhTreesAndEmbreeRobustHaveNoGenuineMismatch) {
         const crosscheck::PairComparison c = crosscheck::compare(index, rays, ha, hb, oa, ob);
         EXPECT_EQ(c.genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
         EXPECT_EQ(c.occlusion_genuine, 0u) << named.name << " " << crosscheck::to_string(kind);
-        // Ambiguities are rare: random rays almost never graze an edge within ~1e-5 of the scene size.
-        EXPECT_GE(c.identical_fraction(), 0.999) << named.name << " " << crosscheck::to_string(kind);
+        // Ambiguities are rare: random rays almost never graze an edge within ~1e-5 of the scene size. (Axis
+        // rays run through vertices and box planes on purpose: many of them are edge cases.)
+        if (kind != crosscheck::RayKind::Axis) {
+          EXPECT_GE(c.identical_fraction(), 0.999) << named.name << " " << crosscheck::to_string(kind);
+        }
         // Rays leaving a convex or flat surface (diffuse bounces, shadow segments toward geometry 0) may
         // legitimately all miss; rays from the camera and through the bounds must find something.
         if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {

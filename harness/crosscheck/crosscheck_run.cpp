@@ -1,5 +1,7 @@
 #include "harness/crosscheck/crosscheck_run.h"
 
+#include "harness/scenes/named_scene.h"
+
 #include "backends/registry.h"
 #include "harness/arbiter/arbiter.h"
 #include "harness/arbiter/tolerances.h"
@@ -138,7 +140,8 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
   if (names.size() < 2) throw std::invalid_argument("--backends needs at least two backends to compare");
 
   const ScopedFlushDenormals ftz;
-  const Scene scene = load_scene(settings.scene);
+  // A file, $TWINRAY_SHARED/..., or procedural:KIND[:ARG]... (harness/scenes/named_scene.h), as `trace` takes.
+  const Scene scene = load_named_scene(settings.scene.string());
   const GeometryIndex index(scene.geometry);
 
   fmt::print("scene {}: {} triangles, {} spheres ({} degenerate triangles skipped)\n", scene.source.string(),
@@ -333,9 +336,14 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
       arbiter_wrong += t.wrong;
     }
   }
-  const bool passed = total_genuine == 0 && total_wrong_attributes == 0;
-  report += fmt::format("\nverdict: {} ({} genuine mismatches, {} closest hits with wrong u, v or ng, {:.4f}% identical)\n",
-                        passed ? "PASS" : "FAIL", total_genuine, total_wrong_attributes, 100.0 * identical_fraction);
+  const bool passed = total_genuine == 0 && total_wrong_attributes == 0 && (!settings.strict || arbiter_wrong == 0);
+  const std::string arbiter_clause =
+      arbiter_wrong == 0 ? std::string()
+                         : fmt::format(", {} answers the arbiter ruled wrong{}", arbiter_wrong,
+                                       settings.strict ? "" : " (reported; --strict fails on them)");
+  report += fmt::format("\nverdict: {} ({} genuine mismatches, {} closest hits with wrong u, v or ng, {:.4f}% identical{})\n",
+                        passed ? "PASS" : "FAIL", total_genuine, total_wrong_attributes, 100.0 * identical_fraction,
+                        arbiter_clause);
   nlohmann::json j_wrong_attributes = nlohmann::json::object();
   for (std::size_t k = 0; k < backends.size(); ++k) j_wrong_attributes[names[k]] = wrong_attributes[k];
 
@@ -344,6 +352,7 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
   out.genuine_mismatches = total_genuine;
   out.wrong_attributes = total_wrong_attributes;
   out.arbiter_wrong = arbiter_wrong;
+  out.strict = settings.strict;
   out.json = {{"scene", scene.source.string()},
               {"seed", settings.seed},
               {"rays_per_kind", settings.rays_per_kind},
@@ -356,6 +365,7 @@ CrosscheckReport run_crosscheck(const CrosscheckSettings& settings) {
               {"wrong_attributes", j_wrong_attributes},
               {"identical_fraction", identical_fraction},
               {"tolerances", {{"rel_t", kRelT}, {"abs_world", kAbsWorld}, {"grazing_cos", kGrazingCos}}},
+              {"strict", settings.strict},
               {"verdict", passed ? "pass" : "fail"}};
   if (arbiter) {
     out.json["arbiter"] = j_arbiter;

@@ -25,6 +25,9 @@ struct CrosscheckSettings {
   // arbiter_max_rays rays per kind (the first disputed ones).
   bool arbitrate = true;
   std::size_t arbiter_max_rays = 100000;
+  // Also fail the verdict when the arbiter rules any backend's answer wrong (e.g. a backend that claims to be
+  // watertight missing a hit exactly at an edge, which the classifier alone calls "edge").
+  bool strict = false;
 };
 
 struct CrosscheckReport {
@@ -33,8 +36,9 @@ struct CrosscheckReport {
   std::size_t genuine_mismatches = 0;
   // Closest hits whose u, v or ng break the conventions (hit_attributes.h), all backends: part of the verdict.
   std::size_t wrong_attributes = 0;
-  std::size_t arbiter_wrong = 0;  // answers the arbiter ruled wrong, all backends (informative: not in the verdict)
-  bool passed() const { return genuine_mismatches == 0 && wrong_attributes == 0; }
+  std::size_t arbiter_wrong = 0;  // answers the arbiter ruled wrong, all backends (in the verdict only when strict)
+  bool strict = false;
+  bool passed() const { return genuine_mismatches == 0 && wrong_attributes == 0 && (!strict || arbiter_wrong == 0); }
 };
 
 // Throws InputError for a bad scene or plugin, std::invalid_argument for bad settings.

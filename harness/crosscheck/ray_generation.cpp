@@ -1,5 +1,7 @@
 #include "harness/crosscheck/ray_generation.h"
 
+#include "harness/crosscheck/axis_rays.h"
+
 #include "core/camera/pinhole_camera.h"
 #include "core/geometry/ray_offset.h"
 #include "core/sampling/rng.h"
@@ -201,6 +203,9 @@ std::vector<Ray> generate_rays(RayKind kind, const Scene& scene, const Backend& 
       }
       break;
     }
+    case RayKind::Axis:
+      rays = axis_aligned_rays(scene, count, seed);
+      break;
   }
   return rays;
 }

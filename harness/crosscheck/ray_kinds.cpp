@@ -12,6 +12,7 @@ std::string_view to_string(RayKind kind) {
     case RayKind::Uniform: return "uniform";
     case RayKind::Diffuse: return "diffuse";
     case RayKind::Shadow: return "shadow";
+    case RayKind::Axis: return "axis";
   }
   return "?";
 }
@@ -29,7 +30,7 @@ std::vector<RayKind> parse_ray_kinds(std::string_view list) {
     const std::size_t comma = list.find(',', start);
     const std::string_view item = list.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
     const std::optional<RayKind> kind = parse_ray_kind(item);
-    if (!kind) throw std::invalid_argument(fmt::format("unknown ray kind '{}' (choose from camera, uniform, diffuse, shadow)", item));
+    if (!kind) throw std::invalid_argument(fmt::format("unknown ray kind '{}' (choose from camera, uniform, diffuse, shadow, axis)", item));
     for (RayKind k : kinds)
       if (k == *kind) throw std::invalid_argument(fmt::format("ray kind '{}' listed twice", item));
     kinds.push_back(*kind);

@@ -4,6 +4,8 @@
 //   uniform  incoherent rays through the scene bounds, origins inside and around the box
 //   diffuse  cosine-distributed bounce rays leaving first hits (origins on surfaces: self-intersection)
 //   shadow   finite segments from first hits to points on emitters (or random points): any-hit queries
+//   axis     exactly zero direction components of both signs, along axes and in coordinate planes, through
+//            vertices and from the faces of the scene's box (axis_rays.h): a slab test's 0 * inf and -0
 
 #include <optional>
 #include <string>
@@ -12,9 +14,10 @@
 
 namespace twinray::crosscheck {
 
-enum class RayKind { Camera, Uniform, Diffuse, Shadow };
+enum class RayKind { Camera, Uniform, Diffuse, Shadow, Axis };
 
-inline constexpr RayKind kAllRayKinds[] = {RayKind::Camera, RayKind::Uniform, RayKind::Diffuse, RayKind::Shadow};
+inline constexpr RayKind kAllRayKinds[] = {RayKind::Camera, RayKind::Uniform, RayKind::Diffuse, RayKind::Shadow,
+                                           RayKind::Axis};
 
 std::string_view to_string(RayKind kind);
 std::optional<RayKind> parse_ray_kind(std::string_view name);

@@ -3,7 +3,9 @@
 #include "core/camera/pinhole_camera.h"
 #include "core/sampling/rng.h"
 #include "core/sampling/warp.h"
+#include "harness/crosscheck/axis_rays.h"
 #include "harness/crosscheck/ray_generation.h"
+#include "harness/crosscheck/ray_set_support.h"
 
 #include <glm/geometric.hpp>
 
@@ -17,28 +19,11 @@ namespace twinray::grade {
 
 namespace {
 
-glm::vec2 next2(Rng& rng) { return {rng.next_float(), rng.next_float()}; }
-
-float signed_zero(Rng& rng) { return (rng.next_u32() & 1u) != 0 ? -0.0f : 0.0f; }
-
-// The scene's bounds, or a unit box around the origin for an empty scene.
-Bounds3 scene_box(const Scene& scene) {
-  Bounds3 b = scene.geometry.bounds();
-  if (b.empty()) b = {glm::vec3(-1.0f), glm::vec3(1.0f)};
-  return b;
-}
-
-Bounds3 padded(Bounds3 b, float fraction) {
-  const float pad = std::max(fraction * b.diagonal(), 1e-3f * std::max(1.0f, glm::length(b.center())));
-  b.lo -= glm::vec3(pad);
-  b.hi += glm::vec3(pad);
-  return b;
-}
-
-glm::vec3 point_in(const Bounds3& b, Rng& rng) {
-  const glm::vec3 u{rng.next_float(), rng.next_float(), rng.next_float()};
-  return b.lo + u * (b.hi - b.lo);
-}
+using crosscheck::next2;
+using crosscheck::point_in;
+using crosscheck::signed_zero;
+Bounds3 scene_box(const Scene& scene) { return crosscheck::scene_box_or_unit(scene); }
+Bounds3 padded(const Bounds3& b, float fraction) { return crosscheck::padded_box(b, fraction); }
 
 Ray make(const glm::vec3& org, const glm::vec3& dir, float tmin = 0.0f, float tmax = INFINITY) {
   Ray r;
@@ -93,67 +78,7 @@ std::vector<Ray> interval_rays(std::span<const Ray> rays, std::span<const Hit> h
 }
 
 std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::uint64_t seed) {
-  Rng rng = Rng::keyed(seed, 0xa715, 1);
-  const Bounds3 tight = scene_box(scene);
-  const Bounds3 around = padded(tight, 0.1f);
-  std::vector<glm::vec3> vertices;
-  for (const TriangleMesh& m : scene.geometry.meshes) vertices.insert(vertices.end(), m.positions.begin(), m.positions.end());
-  // Six kinds in turn; the two through vertices only where there are vertices.
-  const std::size_t kinds = vertices.empty() ? 4 : 6;
-  std::vector<Ray> rays;
-  rays.reserve(count);
-  for (std::size_t i = 0; rays.size() < count; ++i) {
-    const int axis = static_cast<int>(rng.next_below(3));
-    const bool negative = (rng.next_u32() & 1u) != 0;
-    glm::vec3 dir, org;
-    switch (i % kinds) {
-      case 4: {  // along an axis through a vertex, from outside the scene's box
-        const glm::vec3 v = vertices[rng.next_below(static_cast<std::uint32_t>(vertices.size()))];
-        dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
-        dir[axis] = negative ? -1.0f : 1.0f;
-        org = v;
-        org[axis] = negative ? around.hi[axis] : around.lo[axis];
-        break;
-      }
-      case 5: {  // in a coordinate plane through a vertex
-        const glm::vec3 v = vertices[rng.next_below(static_cast<std::uint32_t>(vertices.size()))];
-        dir = sample_uniform_sphere(next2(rng));
-        dir[axis] = signed_zero(rng);
-        if (glm::dot(dir, dir) == 0.0f) continue;
-        org = point_in(around, rng);
-        org[axis] = v[axis];
-        break;
-      }
-      case 0:  // along an axis; the other two components are +0 or -0
-        dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
-        dir[axis] = negative ? -1.0f : 1.0f;
-        org = point_in(around, rng);
-        break;
-      case 1: {  // in a coordinate plane: one component exactly +0 or -0
-        dir = sample_uniform_sphere(next2(rng));
-        dir[axis] = signed_zero(rng);
-        if (dir == glm::vec3(0.0f)) continue;
-        org = point_in(around, rng);
-        break;
-      }
-      default: {  // from exactly on a face of the bounding box, pointing inward (along the axis, or in a plane)
-        org = point_in(tight, rng);
-        org[axis] = negative ? tight.hi[axis] : tight.lo[axis];
-        const float inward = negative ? -1.0f : 1.0f;
-        if (i % kinds == 2) {
-          dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
-          dir[axis] = inward;
-        } else {
-          dir = sample_uniform_sphere(next2(rng));
-          dir[axis] = inward * std::max(std::fabs(dir[axis]), 0.1f);
-          dir[(axis + 1 + static_cast<int>(rng.next_below(2))) % 3] = signed_zero(rng);
-        }
-        break;
-      }
-    }
-    rays.push_back(make(org, dir));
-  }
-  return rays;
+  return crosscheck::axis_aligned_rays(scene, count, seed);
 }
 
 namespace {
