@@ -105,7 +105,7 @@ class Bsdf {
     return s;
   }
 
-  bool sample(const glm::vec3& wo, const glm::vec3& ng, float u_lobe, glm::vec2 u, BsdfSample& s) const {
+  [[gnu::always_inline]] bool sample(const glm::vec3& wo, const glm::vec3& ng, float u_lobe, glm::vec2 u, BsdfSample& s) const {
     const float cos_o = glm::dot(wo, ng);
     if (cos_o == 0.0f) return false;  // grazing: no side to scatter into
     if (one_sided_ && cos_o < 0.0f) return false;  // the black back of a one-sided surface

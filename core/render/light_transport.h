@@ -44,7 +44,7 @@ struct SurfacePoint {
 
 // The surface point of `hit` on `ray`, whose direction must be unit length (camera rays and every ray the
 // integrators spawn are): wo is then -dir without a normalisation.
-inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
+[[gnu::always_inline]] inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
   SurfacePoint sp;
   sp.ng = hit.ng;
   sp.wo = -ray.dir;
