@@ -92,7 +92,7 @@ class Bsdf {
   // dielectric; each kind uses only what it needs, so one sampler dimension serves every vertex.
   // False when nothing is scattered (grazing, the black back of a one-sided surface, black); `out` is then
   // unspecified. This is the form the integrators call; the optional ones below wrap it.
-  bool sample(const glm::vec3& wo, const glm::vec3& ng, glm::vec2 u, BsdfSample& out) const {
+  [[gnu::always_inline]] bool sample(const glm::vec3& wo, const glm::vec3& ng, glm::vec2 u, BsdfSample& out) const {
     return sample(wo, ng, u.x, u, out);
   }
   std::optional<BsdfSample> sample(const glm::vec3& wo, const glm::vec3& ng, glm::vec2 u) const {
