@@ -170,8 +170,8 @@ class LightSampler {
   return i;
 }
 
-[[gnu::always_inline]] inline bool LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u,
-                                                           LightSample& s) const {
+[[gnu::always_inline]] inline bool LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref,
+                                                           glm::vec2 u, LightSample& s) const {
   if (!(pmf > 0.0f)) return false;
   s = LightSample{};
   if (i < triangles_.size()) {
