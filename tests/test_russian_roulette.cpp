@@ -14,21 +14,25 @@ TEST(RussianRoulette, NoRouletteBeforeRrDepth) {
   EXPECT_EQ(roulette_survival(4, 5, glm::vec3(0.01f), 1.0f), 1.0f);
 }
 
-TEST(RussianRoulette, SurvivalIsMaxThroughputTimesEtaSquaredBelowOne) {
-  EXPECT_FLOAT_EQ(roulette_survival(5, 5, glm::vec3(0.1f, 0.4f, 0.2f), 1.0f), 0.4f);
+TEST(RussianRoulette, SurvivalIsScaledMaxThroughputTimesEtaSquaredBelowOne) {
+  EXPECT_EQ(kSurvivalScale, 3.0f);
+  EXPECT_FLOAT_EQ(roulette_survival(5, 5, glm::vec3(0.1f, 0.2f, 0.05f), 1.0f), 0.6f);
   // Inside ior-1.5 glass the throughput carries 1/1.5^2 and eta_scale 1.5^2: not killed for it.
-  EXPECT_FLOAT_EQ(roulette_survival(9, 5, glm::vec3(0.5f / 2.25f), 2.25f), 0.5f);
+  EXPECT_FLOAT_EQ(roulette_survival(9, 5, glm::vec3(0.1f / 2.25f), 2.25f), 0.3f);
 }
 
-TEST(RussianRoulette, PathsWithThroughputOneOrMoreAreNotRouletted) {
+TEST(RussianRoulette, PathsWithScaledThroughputOneOrMoreAreNotRouletted) {
   EXPECT_EQ(roulette_survival(6, 5, glm::vec3(1.0f), 1.0f), 1.0f);
+  EXPECT_EQ(roulette_survival(6, 5, glm::vec3(0.0f, 1.0f / 3.0f, 0.0f), 1.0f), 1.0f);
+  EXPECT_LT(roulette_survival(6, 5, glm::vec3(0.0f, 0.33f, 0.0f), 1.0f), 1.0f);
   EXPECT_EQ(roulette_survival(kForcedRouletteDepth - 1, 5, glm::vec3(3.0f, 0.0f, 0.0f), 1.0f), 1.0f);
 }
 
 TEST(RussianRoulette, EveryPathIsRoulettedFromTheForcedDepthOn) {
   EXPECT_EQ(roulette_survival(kForcedRouletteDepth, 5, glm::vec3(1.0f), 1.0f), kMaxSurvival);
   EXPECT_LT(kMaxSurvival, 1.0f);
-  EXPECT_FLOAT_EQ(roulette_survival(kForcedRouletteDepth, 5, glm::vec3(0.25f), 1.0f), 0.25f);
+  EXPECT_FLOAT_EQ(roulette_survival(kForcedRouletteDepth, 5, glm::vec3(0.25f), 1.0f), 0.75f);
+  EXPECT_FLOAT_EQ(roulette_survival(kForcedRouletteDepth, 5, glm::vec3(0.25f), 1.0f / 3.0f), 0.25f);
 }
 
 TEST(RussianRoulette, SurvivorsAreReweightedAndNoRandomNumberIsDrawnWithoutRoulette) {
@@ -42,11 +46,11 @@ TEST(RussianRoulette, SurvivorsAreReweightedAndNoRandomNumberIsDrawnWithoutRoule
   constexpr int kTrials = 200000;
   double sum = 0.0;
   for (int i = 0; i < kTrials; ++i) {
-    glm::vec3 p(0.3f, 0.1f, 0.2f);
+    glm::vec3 p(0.1f, 0.05f, 0.02f);
     if (survive_roulette(8, 5, 1.0f, p, rng)) sum += p.x;
   }
-  // Bernoulli(0.3) times 1: standard error sqrt(0.3 * 0.7 / n) ~ 1.0e-3; 5 standard errors.
-  EXPECT_NEAR(sum / kTrials, 0.3, 5.2e-3);
+  // Survival q = 0.3 with weight 0.1 / 0.3: standard error (1/3) sqrt(0.3 * 0.7 / n) ~ 3.4e-4; 5 standard errors.
+  EXPECT_NEAR(sum / kTrials, 0.1, 1.75e-3);
 }
 
 TEST(RussianRoulette, NanThroughputEndsThePath) {

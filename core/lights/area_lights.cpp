@@ -106,25 +106,6 @@ std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, glm::vec2 
   return s;
 }
 
-std::size_t LightSampler::select_light(float u, float& pmf, float& rest) const {
-  if (cdf_.empty()) return selection_->sample_discrete(u, &pmf, &rest);
-  // Empty bins (zero power) have cdf[i] == cdf[i+1]: both steps are counted or neither, so they are
-  // skipped; u < 1 = cdf[n] never counts the last step.
-  const std::size_t n = pmf_.size();
-  std::size_t i = 0;
-  for (std::size_t k = 1; k < n; ++k) i += u >= cdf_[k] ? 1 : 0;
-  pmf = pmf_[i];
-  rest = std::max(std::min((u - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f), 0.0f);
-  return i;
-}
-
-bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
-  if (!selection_) return false;
-  float pmf = 0.0f, rest = 0.0f;
-  const std::size_t i = select_light(u.x, pmf, rest);
-  return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
-}
-
 std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_select, glm::vec2 u) const {
   if (!selection_) return std::nullopt;
   float pmf = 0.0f;
@@ -132,38 +113,6 @@ std::optional<LightSample> LightSampler::sample(const glm::vec3& ref, float u_se
   LightSample s;
   if (!sample_light(i, pmf, ref, u, s)) return std::nullopt;
   return s;
-}
-
-bool LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
-  if (!(pmf > 0.0f)) return false;
-  s = LightSample{};
-  if (i < triangles_.size()) {
-    sample_triangle(triangles_[i], ref, u, s);
-  } else if (i - triangles_.size() < spheres_.size()) {
-    sample_sphere(spheres_[i - triangles_.size()], ref, u, s);
-  } else {
-    const EnvironmentLight::Sample es = env_->sample(u);
-    s.wi = es.dir;
-    s.radiance = es.radiance;
-    s.pdf = es.pdf;
-    s.is_environment = true;
-  }
-  s.pdf *= pmf;
-  return s.pdf > 0.0f && std::isfinite(s.pdf);
-}
-
-void LightSampler::sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref, glm::vec2 u, LightSample& s) {
-  const glm::vec3 b = sample_uniform_triangle(u);
-  s.point = tri.p0 + b.y * tri.e1 + b.z * tri.e2;
-  s.normal = tri.normal;
-  const glm::vec3 d = s.point - ref;
-  const float dist2 = glm::dot(d, d);
-  if (!(dist2 > 0.0f)) return;  // pdf 0: rejected by the caller
-  s.wi = d / std::sqrt(dist2);
-  const float cos_light = -glm::dot(s.normal, s.wi);
-  if (!(cos_light > 0.0f)) return;  // back side (one-sided emission) or edge-on: no contribution
-  s.radiance = tri.radiance;
-  s.pdf = dist2 / (cos_light * tri.area);
 }
 
 void LightSampler::sample_sphere(const EmissiveSphere& sph, const glm::vec3& ref, glm::vec2 u, LightSample& s) {

@@ -23,11 +23,15 @@
 #include "core/geometry/hit.h"
 #include "core/lights/environment_light.h"
 #include "core/sampling/distribution_1d.h"
+#include "core/sampling/warp.h"
 #include "core/scene/scene.h"
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -143,5 +147,61 @@ class LightSampler {
   std::vector<float> pmf_;        // size n
   float surface_fraction_ = 0.0f; // probability that sample() picks a surface light (1 without environment)
 };
+
+// The light sample of every path vertex, defined here and forced inline so that it compiles into the path
+// integrator's loop: 2.2% fewer instructions of the Cornell box render than calls into area_lights.cpp
+// (callgrind; docs/rendering.md). Spheres and the environment stay out of line.
+[[gnu::always_inline]] inline bool LightSampler::sample(const glm::vec3& ref, glm::vec2 u, LightSample& s) const {
+  if (!selection_) return false;
+  float pmf = 0.0f, rest = 0.0f;
+  const std::size_t i = select_light(u.x, pmf, rest);
+  return sample_light(i, pmf, ref, glm::vec2(rest, u.y), s);
+}
+
+[[gnu::always_inline]] inline std::size_t LightSampler::select_light(float u, float& pmf, float& rest) const {
+  if (cdf_.empty()) return selection_->sample_discrete(u, &pmf, &rest);
+  // Empty bins (zero power) have cdf[i] == cdf[i+1]: both steps are counted or neither, so they are
+  // skipped; u < 1 = cdf[n] never counts the last step.
+  const std::size_t n = pmf_.size();
+  std::size_t i = 0;
+  for (std::size_t k = 1; k < n; ++k) i += u >= cdf_[k] ? 1 : 0;
+  pmf = pmf_[i];
+  rest = std::max(std::min((u - cdf_[i]) * inv_width_[i], 0x1.fffffep-1f), 0.0f);
+  return i;
+}
+
+[[gnu::always_inline]] inline bool LightSampler::sample_light(std::size_t i, float pmf, const glm::vec3& ref,
+                                                           glm::vec2 u, LightSample& s) const {
+  if (!(pmf > 0.0f)) return false;
+  s = LightSample{};
+  if (i < triangles_.size()) {
+    sample_triangle(triangles_[i], ref, u, s);
+  } else if (i - triangles_.size() < spheres_.size()) {
+    sample_sphere(spheres_[i - triangles_.size()], ref, u, s);
+  } else {
+    const EnvironmentLight::Sample es = env_->sample(u);
+    s.wi = es.dir;
+    s.radiance = es.radiance;
+    s.pdf = es.pdf;
+    s.is_environment = true;
+  }
+  s.pdf *= pmf;
+  return s.pdf > 0.0f && std::isfinite(s.pdf);
+}
+
+[[gnu::always_inline]] inline void LightSampler::sample_triangle(const EmissiveTriangle& tri, const glm::vec3& ref,
+                                                              glm::vec2 u, LightSample& s) {
+  const glm::vec3 b = sample_uniform_triangle(u);
+  s.point = tri.p0 + b.y * tri.e1 + b.z * tri.e2;
+  s.normal = tri.normal;
+  const glm::vec3 d = s.point - ref;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > 0.0f)) return;  // pdf 0: rejected by the caller
+  s.wi = d / std::sqrt(dist2);
+  const float cos_light = -glm::dot(s.normal, s.wi);
+  if (!(cos_light > 0.0f)) return;  // back side (one-sided emission) or edge-on: no contribution
+  s.radiance = tri.radiance;
+  s.pdf = dist2 / (cos_light * tri.area);
+}
 
 }  // namespace twinray

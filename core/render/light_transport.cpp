@@ -63,35 +63,6 @@ float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf
   return 1.0f;
 }
 
-bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy, glm::vec2 u,
-                          ShadowQuery& out) {
-  if (ctx.lights == nullptr || strategy == SamplingStrategy::Bsdf) return false;
-  LightSample ls;
-  if (!ctx.lights->sample(sp.p, u, ls) || max_component(ls.radiance) <= 0.0f) return false;
-  float bsdf_pdf = 0.0f;
-  const glm::vec3 f = sp.bsdf().eval(sp.wo, ls.wi, sp.ng, bsdf_pdf);
-  if (max_component(f) <= 0.0f) return false;
-
-  Ray& shadow = out.ray;
-  if (ls.is_environment) {
-    shadow = spawn_ray(sp, ls.wi);
-  } else {
-    shadow.org = offset_ray_origin(sp.p, glm::dot(ls.wi, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
-    const glm::vec3 target =
-        offset_ray_origin(ls.point, glm::dot(ls.wi, ls.normal) < 0.0f ? ls.normal : -ls.normal);
-    const glm::vec3 d = target - shadow.org;
-    const float dist2 = glm::dot(d, d);
-    if (!(dist2 > 0.0f)) return false;
-    const float inv_dist = 1.0f / std::sqrt(dist2);
-    shadow.dir = d * inv_dist;
-    shadow.tmin = 0.0f;
-    shadow.tmax = dist2 * inv_dist * (1.0f - kShadowRayShortening);
-  }
-  const float weight = strategy == SamplingStrategy::Mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf) : 1.0f;
-  out.contribution = f * ls.radiance * (weight / ls.pdf);
-  return true;
-}
-
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
                               glm::vec2 u, TraceCounters& counters) {
   ShadowQuery q;

