@@ -485,7 +485,6 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
 
   tree.prim_order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) tree.prim_order[i] = refs[i].id;
-  tree.sah_cost = sah_cost(tree.nodes, options);
   return tree;
 }
 
