@@ -29,8 +29,8 @@ namespace {
 
 constexpr int kW = kWideWidth;
 constexpr float kInf = std::numeric_limits<float>::infinity();
-// Binary subtrees of at least this many nodes are evaluated in TBB tasks: a node costs about a hundred
-// instructions, so smaller tasks would cost more to schedule than they save.
+// Binary subtrees of at least this many nodes are evaluated in TBB tasks: a node costs a few hundred
+// instructions, so a task holds about a million, far above what scheduling it costs.
 constexpr std::size_t kParallelNodes = 4096;
 // Wide nodes over at least this many primitives measure and emit their wide children in TBB tasks (a wide
 // node costs about a thousand instructions and covers about twenty primitives).
