@@ -8,10 +8,12 @@
 #include "harness/grade/grade_run.h"
 #include "harness/grade/reports.h"
 #include "harness/grade/suite.h"
+#include "harness/grade/time_calibration.h"
 
 #include <fmt/core.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -30,7 +32,7 @@ struct GradeOptions {
   std::string junit;
   std::string out;
   std::optional<double> time_budget;
-  double time_scale = 1.0;
+  std::string time_scale = "1";  // a factor, or "auto"
   bool list = false;
 };
 
@@ -42,6 +44,15 @@ void require_output_folder(const std::string& file, const char* flag) {
   std::error_code ec;
   if (!std::filesystem::is_directory(parent, ec))
     throw InputError(file, "", fmt::format("{}: the folder {} does not exist", flag, parent.string()));
+}
+
+// A number as C's strtod reads it, with nothing after it; nullopt otherwise.
+std::optional<double> parse_factor(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) return std::nullopt;
+  return value;
 }
 
 std::string running_executable() {
@@ -77,9 +88,15 @@ int run_grade_command(const GradeOptions& opt) {
       return report_bad_input("grade", "--time-budget is a number of seconds from 0 (no budget) to 86400");
     settings.time_budget = opt.time_budget;
   }
-  if (!(opt.time_scale > 0.0) || opt.time_scale > 100.0)
-    return report_bad_input("grade", "--time-scale is a factor greater than 0 and at most 100");
-  settings.time_scale = opt.time_scale;
+  if (opt.time_scale == "auto") {
+    settings.time_calibration = grade::calibrate_time_scale();
+    settings.time_scale = settings.time_calibration->scale;
+  } else {
+    const std::optional<double> f = parse_factor(opt.time_scale);
+    if (!f || !(*f > 0.0) || *f > 100.0)
+      return report_bad_input("grade", "--time-scale is a factor greater than 0 and at most 100, or auto");
+    settings.time_scale = *f;
+  }
 
   // The header once the suite and plugin are loaded; check lines on stdout as they finish, the progress line
   // (stderr, terminals only) cleared before each.
@@ -138,7 +155,8 @@ void add_grade_command(CLI::App& app, CommandRunner& run) {
                   "still to run are reported timeout without running");
   cmd->add_option("--time-scale", opt->time_scale,
                   "Multiply every check's time limits and the suite's time_budget by this factor (0 < F <= 100), for a\n"
-                  "slower or busier grading machine; reproduce lines repeat it")
+                  "slower or busier grading machine; reproduce lines repeat it. auto: time a fixed workload of twinray's\n"
+                  "bvh backend (about a second) and take the factor from a coarse ladder, never below 1 (docs/grading.md)")
       ->capture_default_str();
   cmd->add_flag("--list", opt->list, "List the suite's checks and exit");
   cmd->callback([opt, &run] { run = [opt] { return run_grade_command(*opt); }; });

@@ -11,6 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <map>
+
 namespace twinray {
 namespace {
 
@@ -78,6 +81,48 @@ TEST(BackendsAgree, BvhTreesAndEmbreeRobustHaveNoGenuineMismatch) {
         if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {
           EXPECT_GT(c.hits_a, 0u) << named.name << " " << crosscheck::to_string(kind);
         }
+      }
+    }
+  }
+}
+
+// The crosscheck's ray sets at the ends of float's range: a soup scaled by 2^-100 (squared lengths of its
+// vectors underflow in float) and by 2^100 (they overflow). Generation used to loop forever at 2^-100 (a
+// direction whose float squared length is 0 was drawn again and again); every ray must be valid, the camera
+// and uniform rays must find the scene, and bvh must still agree with brute on each one.
+TEST(BackendsAgree, CrosscheckRaysAtExtremeScales) {
+  const ScopedFlushDenormals ftz;
+  std::map<crosscheck::RayKind, std::size_t> hits_at_scale_1;
+  for (const int exponent : {0, -100, 100}) {
+    SCOPED_TRACE(exponent);
+    SceneGeometry g = random_triangle_soup(300, 7);
+    for (glm::vec3& p : g.meshes[0].positions)
+      for (int a = 0; a < 3; ++a) p[a] = std::ldexp(p[a], exponent);
+    const Scene scene = wrap(std::move(g));
+    auto bvh = make_backend("bvh");
+    auto brute = make_backend("brute");
+    bvh->build(scene.geometry);
+    brute->build(scene.geometry);
+    for (const crosscheck::RayKind kind : crosscheck::kAllRayKinds) {
+      const std::vector<Ray> rays = crosscheck::generate_rays(kind, scene, *bvh, 500, 3);
+      std::size_t hits = 0;
+      for (const Ray& r : rays) {
+        ASSERT_TRUE(is_valid_ray(r)) << crosscheck::to_string(kind);
+        Hit a, b;
+        bvh->intersect(r, a);
+        brute->intersect(r, b);
+        EXPECT_EQ(a.found(), b.found());
+        EXPECT_EQ(a.prim_id, b.prim_id);
+        EXPECT_EQ(a.t, b.t);
+        hits += a.found() ? 1 : 0;
+      }
+      // Camera and uniform rays are made from the scene's box and camera by operations that commute with a
+      // power-of-two scale, so they find the scene exactly as often as at scale 1.
+      if (kind == crosscheck::RayKind::Camera || kind == crosscheck::RayKind::Uniform) {
+        EXPECT_EQ(rays.size(), 500u) << crosscheck::to_string(kind);
+        if (exponent == 0) hits_at_scale_1[kind] = hits;
+        EXPECT_GT(hits, 20u) << crosscheck::to_string(kind);
+        EXPECT_EQ(hits, hits_at_scale_1[kind]) << crosscheck::to_string(kind);
       }
     }
   }

@@ -109,5 +109,29 @@ TEST(Camera, RejectsDegenerateSetups) {
   EXPECT_THROW(PinholeCamera{d}, std::invalid_argument);
 }
 
+// The frame depends on directions only: a setup scaled by a power of two anywhere in float's range (2^-120 to
+// 2^126, where a float dot product of the view vector under- or overflows) gives the unit scale's frame bit
+// for bit, and its rays the same directions. Scene files at 1e30 or 1e-30 used to be refused ("up is parallel
+// to the viewing direction", "look_at equals position").
+TEST(Camera, FrameIsTheSameAtEveryScale) {
+  CameraDesc unit;
+  unit.position = {1.0f, 2.0f, 3.0f};
+  unit.look_at = {-0.5f, 0.25f, -1.0f};
+  unit.up = {0.0f, 1.0f, 0.0f};
+  const PinholeCamera reference(unit);
+  for (const int exponent : {-120, -100, -64, 64, 100, 126}) {
+    CameraDesc d = unit;
+    for (int a = 0; a < 3; ++a) {
+      d.position[a] = std::ldexp(unit.position[a], exponent);
+      d.look_at[a] = std::ldexp(unit.look_at[a], exponent);
+    }
+    const PinholeCamera cam(d);
+    EXPECT_EQ(cam.back(), reference.back()) << "2^" << exponent;
+    EXPECT_EQ(cam.right(), reference.right()) << "2^" << exponent;
+    EXPECT_EQ(cam.up(), reference.up()) << "2^" << exponent;
+    EXPECT_EQ(cam.pixel_center_ray(3, 7).dir, reference.pixel_center_ray(3, 7).dir) << "2^" << exponent;
+  }
+}
+
 }  // namespace
 }  // namespace twinray

@@ -2,8 +2,10 @@
 // output files that validate against their formats, and nothing left behind on bad input.
 
 #include "tests/format_validators.h"
+#include "harness/grade/time_calibration.h"
 #include "tests/grade_test_util.h"
 
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -91,6 +93,52 @@ TEST(GradeCli, TimeScaleMultipliesTheSuitesLimits) {
   EXPECT_NE(check.at("reproduce").get<std::string>().find("--time-scale 0.1"), std::string::npos) << check.dump();
 }
 
+// --time-scale auto times a fixed workload and takes the factor from the ladder of time_calibration.h: recorded
+// with its measure, never below 1, and repeated as a number in reproduce lines (a replay does not recalibrate).
+TEST(GradeCli, TimeScaleAutoIsMeasuredRecordedAndRepeated) {
+  const auto dir = scratch_dir("grade-cli-time-scale-auto");
+  // A missed threshold: its reproduce line is a `grade --check` line, which carries the factor (trace lines have
+  // no time limits to scale).
+  const CommandResult r = run_twinray(grade_args(scotty_plugin("tiny-sah"),
+                                                 "--check tree-quality-soup --time-scale auto --json " + quoted(dir / "card.json")));
+  ASSERT_EQ(r.exit_code, 0) << r.output;  // the check is not required
+  EXPECT_NE(r.output.find("--time-scale auto: the reference workload took"), std::string::npos) << r.output;
+  const nlohmann::json card = read_json_file(dir / "card.json");
+  const nlohmann::json& measure = card.at("time_scale_auto");
+  const double measured = measure.at("measured_seconds").get<double>(), reference = measure.at("reference_seconds").get<double>();
+  EXPECT_GT(measured, 0.0);
+  EXPECT_EQ(reference, grade::kReferenceWorkloadSeconds);
+  const double scale = card.at("time_scale").get<double>();
+  EXPECT_EQ(scale, grade::quantised_time_scale(measured / reference)) << measure.dump();
+  EXPECT_EQ(measure.at("scale").get<double>(), scale);
+  EXPECT_GE(scale, 1.0);
+  ASSERT_EQ(card.at("checks").at(0).at("outcome"), "fail") << card.dump();
+  const std::string reproduce = card.at("checks").at(0).at("reproduce").get<std::string>();
+  EXPECT_NE(reproduce.find("--check tree-quality-soup"), std::string::npos) << reproduce;
+  if (scale != 1.0) {
+    EXPECT_NE(reproduce.find(fmt::format("--time-scale {:g}", scale)), std::string::npos) << reproduce;
+  }
+  EXPECT_EQ(reproduce.find("auto"), std::string::npos) << reproduce;
+  // Without auto the key is there, null (keys are only ever added).
+  const CommandResult plain = run_twinray(grade_args(scotty_plugin(), "--check build-empty --json " + quoted(dir / "plain.json")));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_TRUE(read_json_file(dir / "plain.json").at("time_scale_auto").is_null());
+}
+
+// The ladder: 1 up to a quarter above the reference, then the smallest rung that covers the ratio less that
+// quarter; never above 100.
+TEST(GradeCli, TimeScaleLadder) {
+  EXPECT_EQ(grade::quantised_time_scale(0.2), 1.0);
+  EXPECT_EQ(grade::quantised_time_scale(1.0), 1.0);
+  EXPECT_EQ(grade::quantised_time_scale(1.25), 1.0);
+  EXPECT_EQ(grade::quantised_time_scale(1.3), 1.5);
+  EXPECT_EQ(grade::quantised_time_scale(1.875), 1.5);
+  EXPECT_EQ(grade::quantised_time_scale(1.9), 2.0);
+  EXPECT_EQ(grade::quantised_time_scale(10.0), 8.0);
+  EXPECT_EQ(grade::quantised_time_scale(10.1), 12.0);
+  EXPECT_EQ(grade::quantised_time_scale(1e6), 100.0);
+}
+
 TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
   const auto dir = scratch_dir("grade-cli-bad");
   const std::string outputs = "--json " + quoted(dir / "card.json") + " --gradescope " + quoted(dir / "results.json") +
@@ -104,6 +152,8 @@ TEST(GradeCli, BadInputExitsTwoAndLeavesNothing) {
       {grade_args(scotty_plugin(), "--json " + quoted(dir / "missing-folder" / "card.json")), "missing-folder"},
       {grade_args(scotty_plugin(), "--time-budget -1 " + outputs), "--time-budget"},
       {grade_args(scotty_plugin(), "--time-scale 0 " + outputs), "--time-scale"},
+      {grade_args(scotty_plugin(), "--time-scale fast " + outputs), "--time-scale"},
+      {grade_args(scotty_plugin(), "--time-scale 2x " + outputs), "--time-scale"},
   };
   for (const auto& [args, words] : cases) {
     const CommandResult r = run_twinray(args);

@@ -273,6 +273,88 @@ TEST(GradePlugins, TimeBudgetCutsTheRunAndReportsTheRestAsTimeouts) {
   std::filesystem::remove_all(suite);
 }
 
+// A check's worker must end as a program that used the plugin ends: destroy(), then the plugin's exit handlers
+// and static destructors. A crash or hang there fails a check whose answers were right, with the outcome of
+// what happened (crash, timeout), a detail that says so, figure `teardown`, and a reproduce line that reruns
+// the check. Threads the plugin leaves running (a spinning pool) end with the worker and are no failure.
+TEST(GradePlugins, PluginThatDoesNotEndCleanlyFailsTheCheck) {
+  const std::filesystem::path suite = scratch_suite("teardown", R"({"suite": "teardown",
+    "defaults": {"time_limit": 10, "ray_time_limit": 1, "memory_limit_mib": 1024},
+    "scenes": {"empty": "procedural:empty"},
+    "checks": [{"name": "build-empty", "category": "build", "scene": "empty", "points": 1}]})");
+  struct Case {
+    const char* plugin;
+    Outcome outcome;
+    const char* words;
+  };
+  for (const Case& k : {Case{TWINRAY_TEST_HOSTILE_DESTROY_CRASH_PLUGIN, Outcome::Crash, "crashed with SIGSEGV in destroy"},
+                        Case{TWINRAY_TEST_HOSTILE_EXIT_HANDLER_CRASH_PLUGIN, Outcome::Crash, "crashed with SIGSEGV in destroy"},
+                        Case{TWINRAY_TEST_HOSTILE_EXIT_HANDLER_HANG_PLUGIN, Outcome::Timeout, "exit handlers"}}) {
+    const Scorecard card = grade_with(k.plugin, suite);
+    const CheckResult& c = check_named(card, "build-empty");
+    EXPECT_EQ(c.outcome, k.outcome) << k.plugin << ": " << terminal_check_line(c);
+    EXPECT_NE(c.detail.find("probe rays answered right, but at the end of the check"), std::string::npos) << c.detail;
+    EXPECT_NE(c.detail.find(k.words), std::string::npos) << c.detail;
+    EXPECT_EQ(c.figures.at("teardown").at("outcome"), std::string(to_string(k.outcome))) << c.figures.dump();
+    EXPECT_NE(c.reproduce.find("--check build-empty"), std::string::npos) << c.reproduce;
+    EXPECT_FALSE(card.passed());
+  }
+  for (const char* clean : {TWINRAY_TEST_HOSTILE_SPIN_PLUGIN, TWINRAY_TEST_BRUTE_PLUGIN}) {
+    const Scorecard card = grade_with(clean, suite);
+    const CheckResult& c = check_named(card, "build-empty");
+    EXPECT_EQ(c.outcome, Outcome::Pass) << clean << ": " << terminal_check_line(c);
+    EXPECT_FALSE(c.figures.contains("teardown")) << c.figures.dump();
+  }
+  std::filesystem::remove_all(suite);
+}
+
+// The third red-team round's bugs that the grader missed or reproduced wrongly before (scotty_bvh.cpp 17-33):
+// each is caught by the check made for it, with a reproduce line that replays it, and the correct BVH passes
+// the same checks.
+TEST(GradePlugins, ThirdRoundBugsAreCaughtAndReproduced) {
+  const std::filesystem::path suite = scratch_suite("third-round", R"({"suite": "third-round",
+    "defaults": {"time_limit": 30, "memory_limit_mib": 1024, "seed": 3},
+    "scenes": {"box": "procedural:box:-2:2", "big": "procedural:sphere-mesh:6",
+               "tiny": "procedural:sphere-mesh:3:0:0:0:0.001", "cornell": ")" +
+                                                                testing::source_path("scenes/cornell-box.json").string() +
+                                                                R"("},
+    "checks": [
+      {"name": "axis-aligned-box", "category": "axis-aligned", "scene": "box", "count": 3000, "reference": "brute", "points": 1},
+      {"name": "closest-big", "category": "closest-hit", "scene": "big", "rays": "uniform", "count": 1000, "points": 1},
+      {"name": "closest-tiny", "category": "closest-hit", "scene": "tiny", "rays": "uniform", "count": 1000,
+       "reference": "brute", "points": 1},
+      {"name": "closest-cornell", "category": "closest-hit", "scene": "cornell", "rays": "camera", "count": 4096,
+       "reference": "brute", "points": 1}]})");
+  const auto grade_one = [&](const std::string& bug, const std::string& check) {
+    GradeSettings s;
+    s.plugin = scotty_plugin(bug);
+    s.suite = suite.string();
+    s.only = {check};
+    s.twinray = TWINRAY_BINARY;
+    return run_grade(s);
+  };
+  // NaN from 0 * inf in a slab test: only rays exactly in a box's plane show it (axis-aligned, through vertices).
+  // A 16-bit primitive index: only a mesh of more than 65,536 triangles. A fixed epsilon: only a tiny mesh.
+  for (const auto& [bug, check] : std::vector<std::pair<std::string, std::string>>{
+           {"nan-slab", "axis-aligned-box"}, {"index-16bit", "closest-big"}, {"mt-epsilon", "closest-tiny"}}) {
+    const Scorecard card = grade_one(bug, check);
+    const CheckResult& c = check_named(card, check);
+    EXPECT_EQ(c.outcome, Outcome::Fail) << bug << ": " << terminal_check_line(c);
+    EXPECT_NE(c.reproduce.find(" trace "), std::string::npos) << c.reproduce;
+    EXPECT_EQ(c.figures.value("replays_alone", false), true) << c.figures.dump();
+    EXPECT_EQ(check_named(grade_one("", check), check).outcome, Outcome::Pass) << check;
+  }
+  // A bound carried over from the thread's previous ray: the first wrong ray, asked alone as the reproduce line
+  // would, is answered right, so the reproduce line reruns the check instead.
+  const Scorecard cache = grade_one("last-ray-cache", "closest-cornell");
+  const CheckResult& c = check_named(cache, "closest-cornell");
+  EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
+  EXPECT_NE(c.detail.find("depend on the rays asked before"), std::string::npos) << c.detail;
+  EXPECT_NE(c.reproduce.find("--check closest-cornell"), std::string::npos) << c.reproduce;
+  EXPECT_EQ(c.figures.value("replays_alone", true), false) << c.figures.dump();
+  std::filesystem::remove_all(suite);
+}
+
 // A plugin that writes over the shared memory its worker answers through is stopped at the first answer the
 // worker cannot give, as a crash, rather than waited for until the check's time limit.
 TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {

@@ -451,6 +451,70 @@ TEST(PluginIsolation, CrashInDestroyIsReportedByShutdown) {
   EXPECT_EQ(f->stage, "destroy");
 }
 
+// The end of an instance is the end of a program that used the plugin: destroy(), then the plugin's atexit
+// handlers and static destructors. A crash or a hang there is reported by shutdown(), stage "destroy".
+TEST(PluginIsolation, CrashOrHangInAnExitHandlerIsReportedByShutdown) {
+  const auto crashing = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_EXIT_HANDLER_CRASH_PLUGIN, quick_limits());
+  crashing->build(isolation_scene());
+  std::vector<Hit> hits(64);
+  crashing->intersect(isolation_rays(64, 5), hits);  // it answers (every ray a miss)
+  const std::optional<PluginFailure> crash = failure_of([&] { crashing->shutdown(); });
+  ASSERT_TRUE(crash.has_value());
+  EXPECT_EQ(crash->kind, PluginFailureKind::Crash) << crash->what();
+  EXPECT_EQ(crash->signal_name, "SIGSEGV") << crash->what();
+  EXPECT_EQ(crash->stage, "destroy") << crash->what();
+
+  const auto hanging = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_EXIT_HANDLER_HANG_PLUGIN, quick_limits());
+  hanging->build(isolation_scene());
+  const std::optional<PluginFailure> hang = failure_of([&] { hanging->shutdown(); });
+  ASSERT_TRUE(hang.has_value());
+  EXPECT_EQ(hang->kind, PluginFailureKind::Timeout) << hang->what();
+  EXPECT_EQ(hang->stage, "destroy") << hang->what();
+  EXPECT_TRUE(contains(hang->what(), "exit handlers")) << hang->what();
+}
+
+// A thread of the plugin that crashes between calls (after the last answer) ends the worker while no call of
+// twinray's waits for it: no caller has heard of it, so shutdown() reports it; a clean plugin's does not.
+TEST(PluginIsolation, CrashBetweenCallsIsReportedByShutdown) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_LATE_THREAD_CRASH_PLUGIN, quick_limits());
+  plugin->build(isolation_scene());  // starts the thread, which crashes 100 ms later
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!plugin->failure() && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->shutdown(); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->signal_name, "SIGSEGV") << f->what();
+  EXPECT_TRUE(contains(f->what(), "no call was in progress")) << f->what();
+  // Reported once: a second shutdown has nothing new to say.
+  EXPECT_NO_THROW(plugin->shutdown());
+
+  // A failure a call has already thrown is not reported again at the end.
+  const auto looping = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_SEGV_PLUGIN, quick_limits());
+  looping->build(isolation_scene());
+  EXPECT_TRUE(failure_of([&] { looping->occluded(rays_with_trigger(2, 1)[1]); }).has_value());
+  EXPECT_NO_THROW(looping->shutdown());
+}
+
+// The index of the ray in flight is the worker's word, which plugin code can write. A plugin that hangs while
+// moving that index forward looks like a run of slow rays, each under the limit; it is stopped as a corrupted
+// answer as soon as the index passes the request's last ray (no worker writes that), rather than when the
+// request's whole budget (rays x per-call limit) runs out, or, for 4096 rays, the deadline.
+TEST(PluginIsolation, ForgedProgressPastTheLastRayIsACrashNotAWait) {
+  for (const std::size_t rays_per_request : {std::size_t{1}, std::size_t{4}}) {
+    const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_FORGING_PLUGIN, quick_limits());
+    plugin->build(isolation_scene());
+    plugin->set_deadline(std::chrono::steady_clock::now() + std::chrono::seconds(3));
+    const std::vector<Ray> rays = isolation_rays(rays_per_request, 5);
+    std::vector<Hit> hits(rays.size());
+    const std::optional<PluginFailure> f = failure_of([&] { plugin->intersect(rays, hits); });
+    ASSERT_TRUE(f.has_value());
+    EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+    EXPECT_EQ(f->cause, "corrupted") << f->what();
+    EXPECT_TRUE(contains(f->what(), "index of the ray in flight")) << f->what();
+  }
+}
+
 // Load errors keep the in-process loader's messages (they are produced by the same code, in the worker).
 TEST(PluginIsolation, LoadErrorsAreInputErrorsWithTheInProcessMessages) {
   const auto expect_load_error = [](const std::filesystem::path& path, const std::string& expected) {

@@ -34,6 +34,22 @@ namespace triangle_block_detail {
 
 using triangle_detail::Report;  // what the test reports for the lanes it hits (triangle_watertight.h)
 
+// The lanes whose float edge functions cannot decide (an exact 0: a ray through an edge or a vertex; a NaN:
+// overflow far out in float's range), decided by the scalar test in double with the fill rule. Rare, so kept
+// out of line: inlined, the scalar test's double path made every kernel's hot loop longer.
+template <Report kReport>
+[[gnu::cold, gnu::noinline]] unsigned decide_in_double(const TriangleRay& ray, const TriangleBlock& block,
+                                                       unsigned lanes, float tmin, float tmax, BlockHits& out) {
+  unsigned hits = 0;
+  for (unsigned m = lanes; m != 0; m &= m - 1) {
+    const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
+    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane),
+                                            tmin, tmax, out.t[lane], out.u[lane], out.v[lane]))
+      hits |= 1u << lane;
+  }
+  return hits;
+}
+
 template <Report kReport>
 [[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
                                                  float tmin, float tmax, BlockHits& out) {
@@ -56,17 +72,20 @@ template <Report kReport>
   const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
 
   const __m128 zero = _mm_setzero_ps();
+  // The scalar test's detour (triangle_detail::needs_double): an edge function exactly 0, or NaN (products
+  // that overflowed, far out in float's range).
+  const __m128 nan = _mm_or_ps(_mm_cmpunord_ps(u, v), _mm_cmpunord_ps(w, w));
   const unsigned exact_zero = static_cast<unsigned>(_mm_movemask_ps(
                                   _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)),
-                                            _mm_cmpeq_ps(w, zero)))) & lanes;
+                                            _mm_or_ps(_mm_cmpeq_ps(w, zero), nan)))) & lanes;
   const __m128 any_negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
   const __m128 any_positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
   const unsigned mixed_signs = static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(any_negative, any_positive)));
   unsigned candidates = lanes & ~exact_zero & ~mixed_signs;
   if ((candidates | exact_zero) == 0) return 0;  // the common case: the ray passes beside all four
 
-  // Lanes whose float determinant is 0 miss (parallel, in-plane or projected to a segment), as in the scalar test.
-  candidates &= ~static_cast<unsigned>(_mm_movemask_ps(_mm_cmpeq_ps(_mm_add_ps(_mm_add_ps(u, v), w), zero)));
+  // The candidates' edge functions are non-zero, not NaN and of one sign, so their determinant is not 0: the
+  // scalar test's parallel and in-plane cases all reach it through the detour.
   // The edge test has decided; t, u, v come from the refinement shared with the scalar test
   // (core/intersect/triangle_refine.h), one candidate lane at a time.
   unsigned hits = 0;
@@ -86,13 +105,7 @@ template <Report kReport>
     }
     hits |= 1u << lane;
   }
-  // Rays through an edge or a vertex: the scalar test decides them in double, with the fill rule.
-  for (unsigned m = exact_zero; m != 0; m &= m - 1) {
-    const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
-    if (triangle_detail::intersect<kReport>(ray, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane),
-                                            tmin, tmax, out.t[lane], out.u[lane], out.v[lane]))
-      hits |= 1u << lane;
-  }
+  if (exact_zero != 0) hits |= decide_in_double<kReport>(ray, block, exact_zero, tmin, tmax, out);
   return hits;
 }
 

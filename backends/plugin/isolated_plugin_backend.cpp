@@ -39,6 +39,9 @@ using Clock = std::chrono::steady_clock;
 constexpr auto kCallerSpin = std::chrono::microseconds(50);
 // How long twinray waits for a worker it has killed to be reaped (its output drained) before reporting.
 constexpr auto kReapWait = std::chrono::seconds(5);
+// How long a worker may take to end after the plugin's exit handlers have run (the C library's teardown, the
+// kernel unmapping a large address space on a busy machine), beyond one call's limit.
+constexpr auto kTeardownWait = std::chrono::seconds(10);
 // Added to every handshake word when the worker dies, so a caller about to sleep on it does not (see
 // on_worker_exit).
 constexpr std::uint32_t kDeathBump = 1u << 31;
@@ -88,7 +91,7 @@ std::vector<std::string> worker_environment(const PluginLimits& limits) {
     // handle_*=0: a plugin's SIGSEGV, SIGABRT... reach the worker's handler and end the worker with that
     //   signal, instead of ASan printing a report and exiting with its own code.
     // detect_leaks=0: LeakSanitizer stops the world with ptrace and a clone() without CLONE_THREAD at exit,
-    //   which the sandbox forbids; the worker ends with _exit anyway, and leaks of a plugin are not ours.
+    //   which the sandbox forbids (the worker ends with exit() after destroy), and leaks of a plugin are not ours.
     // allocator_may_return_null=1: an allocation over the memory limit returns NULL (errno ENOMEM) as glibc's
     //   malloc does, so it is reported as out-of-memory rather than as an ASan report.
     // soft_rss_limit_mb + can_use_proc_maps_statm=0: ASan's primary allocator serves small blocks from address
@@ -211,6 +214,8 @@ class IsolatedPluginBackend::Impl {
   template <typename Miss, typename Take>
   void query_in_chunks(std::span<const Ray> rays, pw::Op op, Stage stage, QueryStats* stats, Miss miss, Take take);
   PluginFailure failure_for(int channel) const;
+  // Throws failure_for(channel), and remembers that a caller has been told (see shutdown).
+  [[noreturn]] void throw_failure(int channel) const;
   void throw_if_failed() const;
   // The ray at `request_index` of the channel's current request: its index in the caller's span and its value.
   void attribute_ray(const RequestContext& context, std::uint32_t request_index, PluginFailureDetails& d) const;
@@ -236,6 +241,9 @@ class IsolatedPluginBackend::Impl {
   int failure_channel_ = -1;
   std::atomic<bool> ended_{false};          // the worker is gone or being killed: every call throws
   std::atomic<bool> clean_exit_expected_{false};
+  // A call has thrown the recorded failure: shutdown() need not report it again. A failure no call has seen
+  // (the worker died between calls: a thread of the plugin crashed after the last answer) is shutdown()'s.
+  mutable std::atomic<bool> failure_reported_{false};
   bool shut_down_ = false;
   bool built_ = false;
 
@@ -296,7 +304,7 @@ void IsolatedPluginBackend::Impl::wait_for_startup() {
     }
     pw::futex_wait(&block_->header.startup, state, limit - now);
   }
-  if (ended_.load()) throw failure_for(-1);
+  if (ended_.load()) throw_failure(-1);
   const pw::Header& h = block_->header;
   switch (static_cast<pw::Startup>(state)) {
     case pw::Startup::Ready:
@@ -372,6 +380,8 @@ void IsolatedPluginBackend::Impl::round_trip(const Lease& lease, pw::Op op, std:
   pw::Channel& c = lease.channel();
   c.op = op;
   c.count = count;
+  // The worker counts the rays of this request from 0 upward; it is idle now, so the word is ours to reset.
+  c.current.store(0, std::memory_order_relaxed);
   post(lease);
   wait_for_answer(lease, lease.slot().sequence, per_call);
   check_answer(lease, op, count, lease.slot().context.stage);
@@ -409,9 +419,12 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
   const auto started = Clock::now();
   if (pw::spin_yielding([&] { return c.response.load(std::memory_order_acquire) == sequence; }, kCallerSpin)) return;
   // The per-call limit runs from the moment the worker starts a ray: a batch may take long in all, as long as
-  // every single ray is quick. `current` is the worker's index of the ray in flight. Since that index is the
-  // worker's word, the whole request is also bounded by (rays) x (per-call limit), which a worker that keeps
-  // changing the index cannot extend.
+  // every single ray is quick. `current` is the worker's index of the ray in flight, which only ever grows
+  // within a request (0, 1, ..., count - 1). Since it is the worker's word, and plugin code in the worker's
+  // process can write it, it is trusted no further: an index that goes back or past the last ray is an answer
+  // no worker gives (corrupted, at once), so a forged "progress" can at most step through the request's rays
+  // once, each within the per-call limit, as a slow plugin would; the whole request is bounded by (rays) x
+  // (per-call limit) and by the deadline.
   auto progress_at = started;
   std::uint32_t progress = c.current.load(std::memory_order_relaxed);
   const auto per_call_ticks = std::chrono::duration_cast<Clock::duration>(per_call);
@@ -419,13 +432,17 @@ void IsolatedPluginBackend::Impl::wait_for_answer(const Lease& lease, std::uint3
   for (;;) {
     const std::uint32_t seen = c.response.load(std::memory_order_seq_cst);
     if (seen == sequence) return;
-    if (ended_.load()) throw failure_for(static_cast<int>(lease.index()));
+    if (ended_.load()) throw_failure(static_cast<int>(lease.index()));
     // Until it answers, the worker's word holds the previous request's number: any other number is not its.
     if (seen != sequence - 1)
       fail_corrupted(lease, lease.slot().context.stage,
                      fmt::format("response sequence number {}, while request {} was awaited", seen, sequence));
     const auto now = Clock::now();
     const std::uint32_t at = c.current.load(std::memory_order_relaxed);
+    if (at < progress || at >= std::max<std::uint32_t>(1, lease.slot().context.count))
+      fail_corrupted(lease, lease.slot().context.stage,
+                     fmt::format("the index of the ray in flight went from {} to {} in a request of {} rays", progress, at,
+                                 lease.slot().context.count));
     if (at != progress) {
       progress = at;
       progress_at = now;
@@ -469,6 +486,11 @@ void IsolatedPluginBackend::Impl::end_worker() {
 void IsolatedPluginBackend::Impl::fail(PluginFailureDetails details, int channel) {
   record_failure(std::move(details), channel);
   end_worker();
+  throw_failure(channel);
+}
+
+void IsolatedPluginBackend::Impl::throw_failure(int channel) const {
+  failure_reported_.store(true);
   throw failure_for(channel);
 }
 
@@ -498,6 +520,7 @@ void IsolatedPluginBackend::Impl::throw_if_failed() const {
   d.ray_index.reset();
   d.detail = d.detail.empty() ? std::string("the worker ended in an earlier call; make a new instance")
                               : d.detail + "; the worker ended in an earlier call; make a new instance";
+  failure_reported_.store(true);
   throw PluginFailure(d);
 }
 
@@ -829,6 +852,13 @@ void IsolatedPluginBackend::Impl::shutdown() {
   shut_down_ = true;
   if (ended_.load() || !worker_ || !worker_->running()) {
     ended_.store(true);
+    // The worker died while no call of ours was waiting (a thread of the plugin crashed after the last
+    // answer): no caller has heard of it, so the end of the instance reports it.
+    if (worker_) worker_->wait_for_exit(kReapWait);
+    if (!failure_reported_.load() && failure()) {
+      failure_reported_.store(true);
+      throw *failure();
+    }
     return;
   }
   {
@@ -839,19 +869,35 @@ void IsolatedPluginBackend::Impl::shutdown() {
     set_context(lease, RequestContext{true, Stage::Destroy, {}, nullptr, 0});
     clean_exit_expected_.store(true);
     post(lease);
-    // The worker answers a destroy by exiting; its exit status is the answer.
-    if (!worker_->wait_for_exit(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.query_seconds)))) {
+    // The worker answers a destroy by exiting; its exit status is the answer. The plugin's part (destroy(), its
+    // atexit handlers and static destructors) has one call's limit; the process's own end after that (the C
+    // library's, the kernel's unmapping of what may be gigabytes) a generous bound of its own.
+    const auto per_call = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits_.query_seconds));
+    const auto handlers_limit = Clock::now() + per_call;
+    std::atomic<std::uint32_t>& done = block_->header.crash.exit_handlers_done;
+    while (done.load() == 0 && worker_->running() && Clock::now() < handlers_limit)
+      pw::futex_wait(&done, 0, std::min<Clock::duration>(handlers_limit - Clock::now(), std::chrono::milliseconds(10)));
+    const bool handlers_ran = done.load() != 0 || !worker_->running();
+    if (!handlers_ran || !worker_->wait_for_exit(per_call + kTeardownWait)) {
       PluginFailureDetails d = base_details();
       d.kind = PluginFailureKind::Timeout;
       d.cause = "timeout";
       d.stage = "destroy";
-      d.detail = fmt::format("destroy() took longer than {} s", limits_.query_seconds);
+      d.detail = handlers_ran
+                     ? fmt::format("the worker did not end within {} s of the plugin's exit handlers (a destructor of "
+                                   "the library that never returns?)",
+                                   limits_.query_seconds + std::chrono::duration<double>(kTeardownWait).count())
+                     : fmt::format("destroy() and the plugin's exit handlers and static destructors took longer than {} s",
+                                   limits_.query_seconds);
       record_failure(d, static_cast<int>(lease.index()));
       end_worker();
     }
   }
   ended_.store(true);
-  if (failure()) throw *failure();
+  if (failure()) {
+    failure_reported_.store(true);
+    throw *failure();
+  }
 }
 
 // ---- the public class ----------------------------------------------------------------------------------------

@@ -24,7 +24,7 @@
 namespace twinray::plugin_worker {
 
 inline constexpr std::uint32_t kMagic = 0x7477726bu;  // "twrk"
-inline constexpr std::uint32_t kProtocolVersion = 1;
+inline constexpr std::uint32_t kProtocolVersion = 2;
 
 // File descriptors of the worker: 0 /dev/null, 1 and 2 the output pipe, kControlFd the memfd, kLifelineFd the
 // read end of a pipe whose write end only the parent holds (EOF: the parent is gone, the worker exits).
@@ -67,6 +67,10 @@ struct CrashRecord {
   std::atomic<std::int32_t> thread{kMainThread};
   std::atomic<std::int32_t> syscall{-1};              // SIGSYS from the seccomp filter: the system call number
   std::atomic<std::uint32_t> allocation_failed{0};    // errno was ENOMEM when the signal came (see worker)
+  // 1 once the worker's own exit after destroy has run every atexit handler and static destructor of the plugin
+  // (the recorder's hook runs last): what is left is the C library's and the kernel's teardown of the process,
+  // which for a plugin that used gigabytes can take seconds on a busy machine and is not the plugin's time.
+  std::atomic<std::uint32_t> exit_handlers_done{0};
 };
 
 struct Header {

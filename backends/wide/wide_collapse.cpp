@@ -160,7 +160,8 @@ class Collapser {
     const bool may_be_leaf = s.count <= static_cast<std::uint32_t>(o_.max_leaf_size) && !(s.triangles && s.spheres);
     const float as_leaf = may_be_leaf ? leaf_cost(s) : kInf;
     const float as_node = o_.node_cost * s.area + split[kW];
-    p.leaf = as_leaf <= as_node;
+    // may_be_leaf first: with infinite costs on both sides, a node of too many primitives must not become a leaf.
+    p.leaf = may_be_leaf && as_leaf <= as_node;
     p.cost[0] = kInf;
     p.k[0] = 0;
     p.cost[1] = std::min(as_leaf, as_node);
@@ -183,7 +184,9 @@ class Collapser {
   }
 
   // split[j] = min over k in 1..j-1 of l.cost[k] + r.cost[j - k], j = 2..kW, and the first k (smallest)
-  // that attains it in split_k[j] (0, with split[j] = inf, when every sum is inf).
+  // that attains it in split_k[j]. When no sum compares below infinity (coordinates near float's range
+  // give infinite or NaN areas), split[j] = inf and k = 1: still a valid split, where k = 0 would send
+  // distribute() down the tree without end.
   // Only k <= l.flat_from is tried when neither plan holds a NaN: then both cost rows are non-increasing
   // (cost[j] = min(cost[j - 1], ...)), so for k > s = l.flat_from the sum l.cost[s] + r.cost[j - k] is at
   // least l.cost[s] + r.cost[j - s] (float addition is monotonic), which was tried before and never loses
@@ -194,7 +197,7 @@ class Collapser {
     const int k_max = l.flat_from != 0 && r.flat_from != 0 ? l.flat_from : kW - 1;
     for (int j = 2; j <= kW; ++j) {
       split[j] = kInf;
-      split_k[j] = 0;
+      split_k[j] = 1;
       const int last = std::min(j - 1, k_max);
       for (int k = 1; k <= last; ++k) {
         const float c = l.cost[k] + r.cost[j - k];

@@ -11,7 +11,10 @@
 // float results are exact negations. And fl(x*y) - fl(z*w) has the sign of x*y - z*w or is zero, because
 // rounding is monotonic. So a non-zero float edge function always has the exact sign, and only an exact 0
 // is ambiguous: then all three are recomputed in double, where products of floats are exact and the sign
-// of the difference is exact too.
+// of the difference is exact too. (Far out in float's range a product can overflow: an infinite edge
+// function still has the exact sign, and inf - inf = NaN takes the same double path, where the products are
+// in range. The decision is exact while the sheared coordinates are finite: vertices within about 2^125 of
+// the ray origin; stress case extreme-scale.)
 //
 // Edge ownership (never counted twice): the paper accepts a 0 edge function for both triangles of an edge.
 // We add a fill rule so that a ray exactly through a shared edge or vertex hits exactly one triangle of a
@@ -129,6 +132,15 @@ inline bool owns_edge(float ex, float ey, bool positive) {
   return ey > 0.0f || (ey == 0.0f && ex > 0.0f);
 }
 
+// Whether the float edge functions cannot decide the hit and the exact double path must: one of them is
+// exactly 0 (a ray through an edge or a vertex: the fill rule decides), or NaN. A NaN comes from products
+// that overflowed to infinities of one sign (inf - inf): sheared coordinates beyond about 1.3e19 (2^63), a scene
+// or ray origin far out in float's range. An infinite edge function still has the exact sign (rounding is
+// monotonic up to overflow), so it needs no detour. Mixed non-zero signs are rejected before this is asked.
+inline bool needs_double(float u, float v, float w) {
+  return u == 0.0f || v == 0.0f || w == 0.0f || std::isnan(u) || std::isnan(v) || std::isnan(w);
+}
+
 // What a triangle test reports for a hit: t, u and v; t only; only that there is one (any-hit queries: the
 // correctly rounded t need not be known when its interval lies inside [tmin, tmax]).
 enum class Report { kHit, kT, kAny };
@@ -160,25 +172,24 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
   // another edge function is exactly 0, since a non-zero one has the exact sign (above): the double path
   // below would reject the same triangle.
   if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return false;
-  if (u == 0.0f || v == 0.0f || w == 0.0f) {
-    // Exact in double: each product of two floats fits in 48 bits, and the difference is rounded once,
-    // which preserves its sign (and contraction into an FMA cannot change an exact product).
+  if (needs_double(u, v, w)) {
+    // Exact in double: each product of two floats fits in 48 bits and in double's range, and the difference
+    // is rounded once, which preserves its sign (and contraction into an FMA cannot change an exact product).
     const double du = double(cx) * double(by) - double(cy) * double(bx);
     const double dv = double(ax) * double(cy) - double(ay) * double(cx);
     const double dw = double(bx) * double(ay) - double(by) * double(ax);
-    // Signs are decided in double below; the float copies only feed the determinant's zero test.
     if ((du < 0.0 || dv < 0.0 || dw < 0.0) && (du > 0.0 || dv > 0.0 || dw > 0.0)) return false;
-    const bool positive = du + dv + dw > 0.0;
+    // The determinant in double too: edge functions of a triangle at 1e-30 are about 1e-60, which a float
+    // copy would flush to 0, and their sum (all of one sign) is 0 only when all three are.
+    const double det = du + dv + dw;
+    if (det == 0.0) return false;  // parallel, in-plane or projected to a segment: see conventions above
+    const bool positive = det > 0.0;
     if (du == 0.0 && !triangle_detail::owns_edge(cx - bx, cy - by, positive)) return false;
     if (dv == 0.0 && !triangle_detail::owns_edge(ax - cx, ay - cy, positive)) return false;
     if (dw == 0.0 && !triangle_detail::owns_edge(bx - ax, by - ay, positive)) return false;
-    u = static_cast<float>(du);
-    v = static_cast<float>(dv);
-    w = static_cast<float>(dw);
+    if (std::isnan(det)) return false;  // sheared coordinates overflowed too (coordinates beyond 2^125): undecidable
   }
-
-  const float det = u + v + w;
-  if (det == 0.0f) return false;  // parallel, in-plane or projected to a segment: see conventions above
+  // Otherwise the three are non-zero, not NaN and of one sign, so their sum (the determinant) is not 0.
   if constexpr (kReport == Report::kAny) {
     return refine_triangle_in_interval(ray, p0, p1, p2, tmin, tmax);
   } else {

@@ -23,11 +23,14 @@ glm::vec3 random_point_in(const Bounds3& b, Rng& rng) {
 }
 
 // The scene box grown by 10% of its diagonal on every side, so uniform rays also start outside it.
-// A flat or point-like scene still gets a box of positive volume.
+// A flat or point-like scene still gets a box of positive volume. Nothing absolute: a scene of size 1e-30
+// gets rays at its own scale (the 1e-3 floor applies only to a single point at the origin).
 Bounds3 padded_bounds(const Scene& scene) {
   Bounds3 b = scene.geometry.bounds();
   if (b.empty()) b = Bounds3::of_point(glm::vec3(0.0f));
-  const float pad = std::max(0.1f * b.diagonal(), 1e-3f * std::max(1.0f, glm::length(b.center())));
+  const float diagonal = b.diagonal();
+  const auto distance = static_cast<float>(glm::length(glm::dvec3(b.center())));
+  const float pad = diagonal > 0.0f || distance > 0.0f ? std::max(0.1f * diagonal, 1e-3f * distance) : 1e-3f;
   b.lo -= glm::vec3(pad);
   b.hi += glm::vec3(pad);
   return b;
@@ -89,9 +92,9 @@ class EmitterPointSampler {
       if (scene.material_of(mesh.geom_id).type != MaterialType::Emissive) continue;
       for (std::size_t t = 0; t < mesh.indices.size(); ++t) {
         const glm::uvec3 tri = mesh.indices[t];
-        const glm::vec3 c = glm::cross(mesh.positions[tri[1]] - mesh.positions[tri[0]],
-                                       mesh.positions[tri[2]] - mesh.positions[tri[0]]);
-        total += 0.5 * glm::length(glm::dvec3(c));
+        const glm::dvec3 p0(mesh.positions[tri[0]]);
+        const glm::dvec3 c = glm::cross(glm::dvec3(mesh.positions[tri[1]]) - p0, glm::dvec3(mesh.positions[tri[2]]) - p0);
+        total += 0.5 * glm::length(c);
         entries_.push_back({total, m, t});
       }
     }
@@ -119,7 +122,8 @@ class EmitterPointSampler {
     const glm::uvec3 tri = mesh.indices[e.index];
     const glm::vec3 b = sample_uniform_triangle(next2(rng));
     const glm::vec3 p0 = mesh.positions[tri[0]], p1 = mesh.positions[tri[1]], p2 = mesh.positions[tri[2]];
-    return {b[0] * p0 + b[1] * p1 + b[2] * p2, glm::normalize(glm::cross(p1 - p0, p2 - p0))};
+    const glm::dvec3 n = glm::cross(glm::dvec3(p1) - glm::dvec3(p0), glm::dvec3(p2) - glm::dvec3(p0));
+    return {b[0] * p0 + b[1] * p1 + b[2] * p2, glm::vec3(glm::normalize(n))};
   }
 
  private:
@@ -154,8 +158,9 @@ std::vector<Ray> generate_rays(RayKind kind, const Scene& scene, const Backend& 
         Ray r;
         r.org = random_point_in(box, rng);
         r.dir = random_point_in(box, rng) - r.org;
-        if (glm::dot(r.dir, r.dir) == 0.0f) continue;
-        r.dir = glm::normalize(r.dir);
+        // Exactly zero, and normalised in double: for a scene at 1e-30 the float squared length is 0.
+        if (r.dir == glm::vec3(0.0f)) continue;
+        r.dir = glm::vec3(glm::normalize(glm::dvec3(r.dir)));
         rays.push_back(r);
       }
       break;
@@ -189,7 +194,7 @@ std::vector<Ray> generate_rays(RayKind kind, const Scene& scene, const Backend& 
         Ray r;
         r.org = sp.p;
         r.dir = target - sp.p;
-        if (glm::dot(r.dir, r.dir) == 0.0f) continue;
+        if (r.dir == glm::vec3(0.0f)) continue;
         r.tmin = 0.0f;
         r.tmax = 1.0f;
         rays.push_back(r);

@@ -6,6 +6,7 @@
 
 #include <fmt/core.h>
 
+#include <bit>
 #include <utility>
 
 namespace twinray::grade {
@@ -181,6 +182,14 @@ class Judge {
 Judgement judge(GradeScene& scene, std::span<const Ray> rays, const Answers& plugin, const Answers& reference,
                 const JudgeOptions& options) {
   return Judge(scene, rays, plugin, reference, options).run();
+}
+
+bool same_bits(const Hit& a, const Hit& b) {
+  const auto bits = [](float f) { return std::bit_cast<std::uint32_t>(f); };
+  if (!a.found() && !b.found()) return true;
+  return a.geom_id == b.geom_id && a.prim_id == b.prim_id && bits(a.t) == bits(b.t) && bits(a.u) == bits(b.u) &&
+         bits(a.v) == bits(b.v) && bits(a.ng.x) == bits(b.ng.x) && bits(a.ng.y) == bits(b.ng.y) &&
+         bits(a.ng.z) == bits(b.ng.z);
 }
 
 }  // namespace twinray::grade

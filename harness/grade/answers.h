@@ -74,4 +74,7 @@ Judgement judge(GradeScene& scene, std::span<const Ray> rays, const Answers& plu
 // "geom 0 prim 12 at t 2.5 (0x1.4p+1)" or "a miss".
 std::string describe_hit(const Hit& hit);
 
+// The same hit to the bit: ids, t, u, v and ng (two misses are the same).
+bool same_bits(const Hit& a, const Hit& b);
+
 }  // namespace twinray::grade

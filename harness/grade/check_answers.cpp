@@ -101,8 +101,9 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
   // The ties check measures the tie rule itself; elsewhere a plugin is held to it only when it claims it.
   const bool tie_rule = ctx.spec.category == Category::Ties || ctx.env.plugin.traits().honours_ties;
 
-  const std::unique_ptr<Backend> plugin = ctx.built_plugin();
+  PluginInstance plugin = ctx.built_plugin();
   const Answers mine = trace_rays(*plugin, set.rays, set.queries);
+  plugin.end();
   const Answers expected = trace_rays(ctx.scene.reference(reference), set.rays, set.queries);
   const Judgement j = judge(ctx.scene, set.rays, mine, expected,
                             {set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
@@ -131,6 +132,8 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                            100.0 * static_cast<double>(j.wrong_total()) / static_cast<double>(answers), first.ray,
                            j.first_wrong_description);
     v.reproduce = ctx.trace_command(set.rays[first.ray]);
+    ctx.confirm_replay(v, set.rays[first.ray], first.any_hit, first.any_hit ? Hit{} : mine.hits[first.ray],
+                       first.any_hit && mine.occluded[first.ray] != 0);
   }
 
   if (set.image_width > 0 && ctx.env.images) {

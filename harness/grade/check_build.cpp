@@ -17,11 +17,12 @@ constexpr std::size_t kDefaultProbeRays = 256;
 CheckVerdict run_build_check(CheckContext& ctx) {
   const SceneGeometry& geometry = ctx.scene.geometry();
   double wall = 0.0;
-  const std::unique_ptr<Backend> plugin = ctx.built_plugin(&wall);
+  PluginInstance plugin = ctx.built_plugin(&wall);
   const BuildStats stats = plugin->build_stats();
 
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform}, ctx.count_or(kDefaultProbeRays));
   const Answers mine = trace_rays(*plugin, rays, Queries::Both);
+  plugin.end();
   const Answers expected = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Both);
   const Judgement j = judge(ctx.scene, rays, mine, expected,
                             {Queries::Both, ctx.reference_name(), ctx.env.plugin.traits().honours_ties, "plugin",
@@ -46,6 +47,7 @@ CheckVerdict run_build_check(CheckContext& ctx) {
     v.detail = fmt::format("{}, but {} of {} probe answers are wrong; first, ray {}: {}", built, j.wrong_total(),
                            2 * rays.size(), first.ray, j.first_wrong_description);
     v.reproduce = ctx.trace_command(rays[first.ray]);
+    ctx.confirm_replay(v, rays[first.ray], first.any_hit, mine.hits[first.ray], mine.occluded[first.ray] != 0);
   }
   return v;
 }

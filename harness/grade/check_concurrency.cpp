@@ -30,13 +30,6 @@ constexpr std::size_t kDefaultDeterminismRays = 10000;  // per kind
 // most of their length. Still several calls per thread, starting at different places.
 constexpr std::size_t kChunk = 2048;
 
-bool same_bits(float a, float b) { return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b); }
-
-bool same_bits(const Hit& a, const Hit& b) {
-  return a.geom_id == b.geom_id && a.prim_id == b.prim_id && same_bits(a.t, b.t) && same_bits(a.u, b.u) &&
-         same_bits(a.v, b.v) && same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
-}
-
 struct Difference {
   std::size_t count = 0;
   std::optional<std::size_t> first;
@@ -69,7 +62,7 @@ void trace_rotated(const Backend& backend, std::span<const Ray> rays, std::size_
 
 CheckVerdict run_thread_safety_check(CheckContext& ctx) {
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Diffuse}, ctx.count_or(kDefaultRays));
-  const std::unique_ptr<Backend> plugin = ctx.built_plugin();
+  PluginInstance plugin = ctx.built_plugin();
   Answers single;
   trace_rotated(*plugin, rays, 0, single);
 
@@ -123,6 +116,8 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
     }
   }
 
+  plugin.end();
+
   CheckVerdict v;
   v.passed = differing == 0;
   v.figures = {{"rays", rays.size()}, {"threads", threads}, {"rounds", rounds}, {"answers_compared", compared},
@@ -141,12 +136,15 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
 CheckVerdict run_determinism_check(CheckContext& ctx) {
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Uniform, crosscheck::RayKind::Diffuse},
                                                   ctx.count_or(kDefaultDeterminismRays));
-  const std::unique_ptr<Backend> a = ctx.built_plugin();
+  PluginInstance a = ctx.built_plugin();
   const Answers first = trace_rays(*a, rays, Queries::Both);
   const Answers again = trace_rays(*a, rays, Queries::Both);
-  const std::unique_ptr<Backend> b = ctx.built_plugin();
+  const BuildStats sa = a->build_stats();
+  a.end();
+  PluginInstance b = ctx.built_plugin();
   const Answers rebuilt = trace_rays(*b, rays, Queries::Both);
-  const BuildStats sa = a->build_stats(), sb = b->build_stats();
+  const BuildStats sb = b->build_stats();
+  b.end();
 
   const Difference repeat = differences(first, again), builds = differences(first, rebuilt);
   CheckVerdict v;

@@ -18,8 +18,9 @@ constexpr std::size_t kDefaultRays = 20000;
 CheckVerdict run_watertight_check(CheckContext& ctx) {
   const std::size_t count = ctx.spec.count != 0 ? ctx.spec.count : kDefaultRays;
   const std::vector<Ray> rays = watertight_rays(ctx.scene.scene(), count, ctx.spec.seed, ctx.spec.origin);
-  const std::unique_ptr<Backend> plugin = ctx.built_plugin();
+  PluginInstance plugin = ctx.built_plugin();
   const Answers mine = trace_rays(*plugin, rays, Queries::Both);
+  plugin.end();
   const Answers expected = trace_rays(ctx.scene.reference("embree"), rays, Queries::Both);
 
   std::size_t leaks_closest = 0, leaks_any = 0, reference_leaks = 0;
@@ -49,6 +50,8 @@ CheckVerdict run_watertight_check(CheckContext& ctx) {
     v.detail = fmt::format("{} of {} rays leak through the closed mesh ({} closest-hit, {} any-hit misses); first, ray {}",
                            std::max(leaks_closest, leaks_any), judged, leaks_closest, leaks_any, *first);
     v.reproduce = ctx.trace_command(rays[*first]);
+    const bool closest_leak = !mine.hits[*first].found();
+    ctx.confirm_replay(v, rays[*first], !closest_leak, mine.hits[*first], mine.occluded[*first] != 0);
   }
   return v;
 }

@@ -1,5 +1,7 @@
 #include "harness/grade/checks.h"
 
+#include "backends/plugin/plugin_failure.h"
+#include "harness/grade/answers.h"
 #include "harness/grade/grade_rays.h"
 #include "core/geometry/ray_text.h"
 
@@ -10,11 +12,25 @@
 
 namespace twinray::grade {
 
-std::unique_ptr<Backend> CheckContext::built_plugin(double* build_seconds) const {
+void PluginInstance::end() {
+  if (!backend_) return;
+  try {
+    backend_->shutdown();
+  } catch (const PluginFailure&) {
+    // Only a failure no call has thrown reaches here (shutdown's contract): a crash after the last answer or
+    // in teardown. One that a call threw is the check's outcome already.
+    if (!ctx_->teardown) ctx_->teardown = std::current_exception();
+  } catch (...) {
+    // Anything else at teardown is not the plugin's to answer for, and a destructor must not throw.
+  }
+  backend_.reset();
+}
+
+PluginInstance CheckContext::built_plugin(double* build_seconds) const {
   const bool first = builds++ == 0;
   if (first && failed_builds != nullptr)
     if (std::optional<FailedBuild> f = failed_builds->recall(spec)) throw RecalledBuildFailure(std::move(*f));
-  std::unique_ptr<Backend> plugin = env.plugin.launch(limits());
+  std::unique_ptr<IsolatedPluginBackend> plugin = env.plugin.launch(limits());
   const auto start = std::chrono::steady_clock::now();
   const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   try {
@@ -24,7 +40,38 @@ std::unique_ptr<Backend> CheckContext::built_plugin(double* build_seconds) const
     throw;
   }
   if (build_seconds != nullptr) *build_seconds = seconds();
-  return plugin;
+  return PluginInstance(std::move(plugin), *this);
+}
+
+std::optional<CheckContext::AloneAnswer> CheckContext::answer_alone(const Ray& ray) const {
+  const std::exception_ptr kept = teardown;  // the replay's own end is not the check's
+  std::optional<AloneAnswer> answer;
+  try {
+    PluginInstance plugin = built_plugin();
+    AloneAnswer a;
+    (*plugin).intersect(ray, a.hit);
+    a.occluded = (*plugin).occluded(ray);
+    plugin.end();
+    answer = a;
+  } catch (const std::exception&) {
+    // A crash, a timeout or a failed build of the replay: it proves nothing about the check's failure.
+  }
+  teardown = kept;
+  return answer;
+}
+
+void CheckContext::confirm_replay(CheckVerdict& v, const Ray& ray, bool any_hit, const Hit& batch_hit,
+                                  bool batch_occluded) const {
+  const std::optional<AloneAnswer> alone = answer_alone(ray);
+  if (!alone) return;
+  const bool same = any_hit ? alone->occluded == batch_occluded : same_bits(alone->hit, batch_hit);
+  v.figures["replays_alone"] = same;
+  if (same) return;
+  v.detail += fmt::format(
+      "; asked alone (as the reproduce line asks it) the plugin answers {} instead: its answers depend on the rays "
+      "asked before (state kept between calls), so the reproduce line reruns the check",
+      any_hit ? (alone->occluded ? "occluded" : "not occluded") : describe_hit(alone->hit));
+  v.reproduce = grade_command();
 }
 
 std::string CheckContext::reference_name() const {

@@ -28,6 +28,33 @@ struct CheckEnvironment {
   double time_scale = 1.0;           // --time-scale, repeated in reproduce lines when it is not 1
 };
 
+struct CheckContext;
+struct CheckVerdict;
+
+// One built instance of the plugin, in its own worker, for one check. Ending it ends the worker the way a
+// program that uses the BVH ends: destroy(), then the plugin's atexit handlers and static destructors
+// (IsolatedPluginBackend::shutdown). A crash or hang there, or a crash of a plugin thread after the last
+// answer, becomes the check's teardown failure (CheckContext::teardown). Checks end an instance as soon as
+// they have its answers, so that nothing the plugin left running (a spinning helper thread) runs while the
+// grader computes references, times them or judges. The destructor ends it too.
+class PluginInstance {
+ public:
+  PluginInstance(std::unique_ptr<IsolatedPluginBackend> backend, const CheckContext& ctx)
+      : backend_(std::move(backend)), ctx_(&ctx) {}
+  PluginInstance(PluginInstance&&) = default;
+  PluginInstance& operator=(PluginInstance&&) = delete;
+  ~PluginInstance() { end(); }
+
+  const Backend& operator*() const { return *backend_; }
+  const IsolatedPluginBackend* operator->() const { return backend_.get(); }
+  // Ends the worker; afterwards the instance answers nothing. Never throws.
+  void end();
+
+ private:
+  std::unique_ptr<IsolatedPluginBackend> backend_;
+  const CheckContext* ctx_;
+};
+
 struct CheckContext {
   const CheckSpec& spec;
   GradeScene& scene;
@@ -38,12 +65,29 @@ struct CheckContext {
   // False when the deadline is the suite's time_budget running out before the check's own time_limit.
   bool own_deadline = true;
   mutable int builds = 0;  // plugin builds started by this check
+  // The first failure of a plugin instance at its end (PluginInstance), if one had any: a PluginFailure.
+  mutable std::exception_ptr teardown = nullptr;
 
   LaunchLimits limits() const { return {deadline, spec.memory_limit_bytes, spec.ray_time_limit_seconds}; }
   // A fresh plugin instance, built on the check's scene. Throws RecalledBuildFailure instead when the same
   // build failed in an earlier check under limits no more generous (failed_builds.h); `build_seconds`, when
   // given, receives the wall-clock time of the build call.
-  std::unique_ptr<Backend> built_plugin(double* build_seconds = nullptr) const;
+  PluginInstance built_plugin(double* build_seconds = nullptr) const;
+  // The plugin's answers to `ray` asked alone, of a fresh instance built on the check's scene, the way the
+  // reproduce line's `twinray trace` asks them (closest hit, then any hit); nullopt when that replay fails
+  // (crashes, times out: within the check's own deadline) or cannot be made. A failure no single ray replays
+  // (an answer that depends on the rays asked before, memory that ran out over many calls) is reproduced by
+  // rerunning the check instead.
+  struct AloneAnswer {
+    Hit hit;
+    bool occluded = false;
+  };
+  std::optional<AloneAnswer> answer_alone(const Ray& ray) const;
+  // For a check that failed on a wrong answer, whose reproduce line traces `ray`: asks the ray alone
+  // (answer_alone) and, when the plugin then answers otherwise than it did among the check's rays (its
+  // `batch_hit`, or `batch_occluded` for an any-hit answer), says so in the detail and reruns the check as the
+  // reproduce line. Figure `replays_alone` records whether the ray alone gives the same answer.
+  void confirm_replay(CheckVerdict& v, const Ray& ray, bool any_hit, const Hit& batch_hit, bool batch_occluded) const;
   // The built-in backend the check's answers are compared with.
   std::string reference_name() const;
   // `twinray trace SCENE --backends plugin:PATH,REFERENCE --ray '...'`: replays one ray.

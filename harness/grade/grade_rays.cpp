@@ -96,13 +96,34 @@ std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::u
   Rng rng = Rng::keyed(seed, 0xa715, 1);
   const Bounds3 tight = scene_box(scene);
   const Bounds3 around = padded(tight, 0.1f);
+  std::vector<glm::vec3> vertices;
+  for (const TriangleMesh& m : scene.geometry.meshes) vertices.insert(vertices.end(), m.positions.begin(), m.positions.end());
+  // Six kinds in turn; the two through vertices only where there are vertices.
+  const std::size_t kinds = vertices.empty() ? 4 : 6;
   std::vector<Ray> rays;
   rays.reserve(count);
   for (std::size_t i = 0; rays.size() < count; ++i) {
     const int axis = static_cast<int>(rng.next_below(3));
     const bool negative = (rng.next_u32() & 1u) != 0;
     glm::vec3 dir, org;
-    switch (i % 4) {
+    switch (i % kinds) {
+      case 4: {  // along an axis through a vertex, from outside the scene's box
+        const glm::vec3 v = vertices[rng.next_below(static_cast<std::uint32_t>(vertices.size()))];
+        dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
+        dir[axis] = negative ? -1.0f : 1.0f;
+        org = v;
+        org[axis] = negative ? around.hi[axis] : around.lo[axis];
+        break;
+      }
+      case 5: {  // in a coordinate plane through a vertex
+        const glm::vec3 v = vertices[rng.next_below(static_cast<std::uint32_t>(vertices.size()))];
+        dir = sample_uniform_sphere(next2(rng));
+        dir[axis] = signed_zero(rng);
+        if (glm::dot(dir, dir) == 0.0f) continue;
+        org = point_in(around, rng);
+        org[axis] = v[axis];
+        break;
+      }
       case 0:  // along an axis; the other two components are +0 or -0
         dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
         dir[axis] = negative ? -1.0f : 1.0f;
@@ -111,7 +132,7 @@ std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::u
       case 1: {  // in a coordinate plane: one component exactly +0 or -0
         dir = sample_uniform_sphere(next2(rng));
         dir[axis] = signed_zero(rng);
-        if (glm::dot(dir, dir) == 0.0f) continue;
+        if (dir == glm::vec3(0.0f)) continue;
         org = point_in(around, rng);
         break;
       }
@@ -119,7 +140,7 @@ std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::u
         org = point_in(tight, rng);
         org[axis] = negative ? tight.hi[axis] : tight.lo[axis];
         const float inward = negative ? -1.0f : 1.0f;
-        if (i % 4 == 2) {
+        if (i % kinds == 2) {
           dir = {signed_zero(rng), signed_zero(rng), signed_zero(rng)};
           dir[axis] = inward;
         } else {
@@ -139,18 +160,23 @@ namespace {
 
 // Area-weighted vertex normals keyed by position (bit for bit), over every mesh: meshes whose faces do not
 // share vertex indices (a box of six separate faces) still get one normal per corner, between its faces.
+// In double: the cross products of a scene at 1e-30 (about 1e-60) would be 0 in float, and of one at 1e30
+// would overflow.
 class VertexNormals {
  public:
   explicit VertexNormals(const SceneGeometry& g) {
     for (const TriangleMesh& m : g.meshes)
       for (const glm::uvec3& t : m.indices) {
-        const glm::vec3 n = glm::cross(m.positions[t[1]] - m.positions[t[0]], m.positions[t[2]] - m.positions[t[0]]);
+        const glm::dvec3 p0(m.positions[t[0]]);
+        const glm::dvec3 n = glm::cross(glm::dvec3(m.positions[t[1]]) - p0, glm::dvec3(m.positions[t[2]]) - p0);
         for (int k = 0; k < 3; ++k) sums_[key(m.positions[t[k]])] += n;
       }
   }
+  // The unit normal at p, or 0 where the faces' normals cancel (or p is no vertex).
   glm::vec3 at(const glm::vec3& p) const {
     const auto it = sums_.find(key(p));
-    return it == sums_.end() ? glm::vec3(0.0f) : it->second;
+    if (it == sums_.end() || it->second == glm::dvec3(0.0)) return glm::vec3(0.0f);
+    return glm::vec3(glm::normalize(it->second));
   }
 
  private:
@@ -158,7 +184,7 @@ class VertexNormals {
   static Key key(const glm::vec3& p) {
     return {std::bit_cast<std::uint32_t>(p.x), std::bit_cast<std::uint32_t>(p.y), std::bit_cast<std::uint32_t>(p.z)};
   }
-  std::map<Key, glm::vec3> sums_;
+  std::map<Key, glm::dvec3> sums_;
 };
 
 }  // namespace
@@ -185,14 +211,13 @@ std::vector<Ray> watertight_rays(const Scene& scene, std::size_t count, std::uin
       case 1: dir = p0 - inside; break;                                 // exactly through a vertex
       case 2: dir = 0.5f * (p0 + p1) - inside; break;                   // through an edge's midpoint
       default: {  // from outside, at a vertex, along its normal: between all its faces, across none of them
-        const glm::vec3 n = normals.at(p0);
-        if (glm::dot(n, n) == 0.0f) continue;
-        const glm::vec3 out = glm::normalize(n);
+        const glm::vec3 out = normals.at(p0);
+        if (out == glm::vec3(0.0f)) continue;
         rays.push_back(make(p0 + reach * out, -out));
         continue;
       }
     }
-    if (glm::dot(dir, dir) == 0.0f) continue;
+    if (dir == glm::vec3(0.0f)) continue;
     rays.push_back(make(inside, dir));
   }
   return rays;
@@ -246,7 +271,7 @@ std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t s
     b = 0.1f + 0.7f * b;
     const glm::vec3 target = b[0] * mesh.positions[tri[0]] + b[1] * mesh.positions[tri[1]] + b[2] * mesh.positions[tri[2]];
     const glm::vec3 org = point_in(around, rng);
-    if (glm::dot(target - org, target - org) == 0.0f) continue;
+    if (target == org) continue;
     rays.push_back(make(org, target - org));
   }
   return rays;

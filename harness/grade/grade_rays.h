@@ -37,8 +37,11 @@ inline constexpr float kIntervalMargin = 1e-3f;
 // surface, [tmin, t(1+m)] and [t(1-m), tmax] must. Rays that miss give none.
 std::vector<Ray> interval_rays(std::span<const Ray> rays, std::span<const Hit> hits);
 
-// Rays with exactly zero direction components, of both signs: along the axes, in the coordinate planes, and
-// from origins exactly on the faces of the scene's bounding box, pointing inward.
+// Rays with exactly zero direction components, of both signs: along the axes, in the coordinate planes, from
+// origins exactly on the faces of the scene's bounding box, pointing inward, and (scenes with triangles) along
+// the axes and in the coordinate planes through a vertex: the origin has the vertex's coordinate in every axis
+// the direction is zero in, so the ray runs exactly in the planes of every box that has the vertex on a face
+// (a slab test that computes 0 * inf = NaN there must not lose the box).
 std::vector<Ray> axis_aligned_rays(const Scene& scene, std::size_t count, std::uint64_t seed);
 
 // Rays that must hit a closed mesh: from `origin` (inside; default the centre of the bounds) in random

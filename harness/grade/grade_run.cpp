@@ -51,6 +51,25 @@ std::string budget_words(double budget) {
   return fmt::format("the suite's time_budget of {:g} s ran out; --time-budget changes it", budget);
 }
 
+// A plugin instance of the check did not end cleanly (checks.h, PluginInstance): a thread of the plugin crashed
+// after the last answer, or destroy(), an exit handler or a static destructor crashed or hung. The answers are
+// judged all the same; a check they pass takes the teardown's outcome (crash, timeout), one they fail stays
+// failed. Either way the detail says it and figure `teardown` holds it; no single ray replays it.
+void add_teardown_failure(const CheckContext& ctx, CheckResult& r) {
+  const FailureReport f = classify_failure(ctx.teardown, ctx.spec.ray_time_limit_seconds);
+  const std::string what = "at the end of the check (after its last answer: destroy, exit handlers, the plugin's "
+                           "threads) " + f.detail;
+  if (r.outcome == Outcome::Pass) {
+    r.outcome = f.outcome;
+    r.detail += ", but " + what;
+    r.reproduce = ctx.grade_command();
+  } else {
+    r.detail += "; also " + what;
+  }
+  r.figures["teardown"] = {{"outcome", to_string(f.outcome)}, {"detail", one_line(f.detail)}};
+  if (!f.output.empty() && !r.figures.contains("plugin_output")) r.figures["plugin_output"] = f.output;
+}
+
 // Runs one check in a fresh plugin worker and fills its outcome, detail, reproduce line, figures and image.
 // `run_end` is when the run's time budget runs out, if it has one.
 void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckResult& r, std::vector<PendingImage>& images,
@@ -74,6 +93,7 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
       images.push_back({png, std::move(*v.image)});
     }
     r.figures = std::move(v.figures);
+    if (ctx.teardown) add_teardown_failure(ctx, r);
     r.detail = one_line(r.detail);  // a detail may quote the plugin's own words (its hit's ids, its message)
   } catch (const InputError&) {
     throw;
@@ -93,6 +113,14 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
     // concurrent calls, a crash is the race's, and tracing the ray it hit answers normally.
     const bool concurrent = ctx.spec.category == Category::ThreadSafety;
     r.reproduce = f.ray && !concurrent ? ctx.trace_command(*f.ray) : ctx.grade_command();
+    // A crash on a ray that, traced alone, is answered normally needs the calls before it (memory that ran out
+    // over many calls, state kept between them): the check reproduces it, that ray does not.
+    if (f.outcome == Outcome::Crash && f.ray && !concurrent && ctx.answer_alone(*f.ray)) {
+      r.detail = one_line(f.detail) + "; traced alone that ray is answered normally: the crash needs the calls before "
+                                      "it, so the reproduce line reruns the check";
+      r.reproduce = ctx.grade_command();
+      r.figures["replays_alone"] = false;
+    }
     if (!f.output.empty()) r.figures["plugin_output"] = f.output;
   }
 }
@@ -135,6 +163,7 @@ Scorecard run_grade(const GradeSettings& settings) {
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();
   card.time_scale = settings.time_scale;
+  card.time_calibration = settings.time_calibration;
   const std::optional<double> flag_budget = settings.time_budget;
   if (flag_budget) {
     if (*flag_budget > 0.0) card.time_budget = *flag_budget;

@@ -33,6 +33,8 @@ struct GradeSettings {
   // grading machine slower or busier than the one the suite was written on. An explicit --time-budget is
   // taken as given. Reproduce lines carry it, so that a replay runs under the same limits.
   double time_scale = 1.0;
+  // --time-scale auto: the calibration time_scale was set from (time_calibration.h), recorded in the scorecard.
+  std::optional<TimeCalibration> time_calibration;
   // Called once the suite and plugin are loaded, before the first check (the terminal header), then after
   // every check, in order (the terminal report streams its lines from here).
   std::function<void(const Scorecard& card, std::size_t total)> on_start;

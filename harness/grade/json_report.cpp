@@ -46,7 +46,12 @@ nlohmann::json scorecard_json(const Scorecard& card) {
                       {"skipped", card.count(Outcome::Skipped)}}},
           {"seconds", card.seconds},
           {"time_budget", card.time_budget ? nlohmann::json(*card.time_budget) : nlohmann::json(nullptr)},
-          {"time_scale", card.time_scale}};
+          {"time_scale", card.time_scale},
+          {"time_scale_auto", card.time_calibration
+                                  ? nlohmann::json{{"reference_seconds", card.time_calibration->reference_seconds},
+                                                   {"measured_seconds", card.time_calibration->measured_seconds},
+                                                   {"scale", card.time_calibration->scale}}
+                                  : nlohmann::json(nullptr)}};
 }
 
 }  // namespace twinray::grade

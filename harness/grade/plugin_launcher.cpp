@@ -46,7 +46,7 @@ PluginLauncher::PluginLauncher(std::filesystem::path so) : path_(std::filesystem
   }
 }
 
-std::unique_ptr<Backend> PluginLauncher::launch(const LaunchLimits& limits) const {
+std::unique_ptr<IsolatedPluginBackend> PluginLauncher::launch(const LaunchLimits& limits) const {
   return make_isolated_plugin_backend(path_, limits_of(limits));
 }
 

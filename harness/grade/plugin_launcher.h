@@ -7,6 +7,7 @@
 // out of memory or a sandbox violation), timeout, or fail (a contract violation: a hit on a primitive that
 // does not exist, a failed build), with a one-line detail and the ray being traced when it happened.
 
+#include "backends/plugin/isolated_plugin_backend.h"
 #include "core/backend/backend.h"
 #include "harness/grade/vocabulary.h"
 
@@ -32,7 +33,7 @@ class PluginLauncher {
   explicit PluginLauncher(std::filesystem::path so);
 
   // A fresh, unbuilt instance in a new worker process, with the check's deadline and memory limit.
-  std::unique_ptr<Backend> launch(const LaunchLimits& limits) const;
+  std::unique_ptr<IsolatedPluginBackend> launch(const LaunchLimits& limits) const;
 
   const std::filesystem::path& path() const { return path_; }  // absolute
   const std::string& name() const { return name_; }            // "plugin:NAME"

@@ -5,6 +5,7 @@
 
 #include "core/backend/backend.h"
 #include "core/image/image.h"
+#include "harness/grade/time_calibration.h"
 #include "harness/grade/vocabulary.h"
 
 #include <nlohmann/json.hpp>
@@ -55,6 +56,7 @@ struct Scorecard {
   double seconds = 0.0;
   std::optional<double> time_budget;  // seconds for the whole run (the suite's or --time-budget), if any
   double time_scale = 1.0;            // --time-scale: what every time limit of the suite was multiplied by
+  std::optional<TimeCalibration> time_calibration;  // --time-scale auto: the measure time_scale came from
   std::vector<PendingImage> images;
 
   double score() const;

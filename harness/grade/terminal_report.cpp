@@ -34,6 +34,10 @@ std::string outcome_label(const CheckResult& c) {
 std::string terminal_header(const Scorecard& card, std::size_t checks) {
   std::string budget = card.time_budget ? fmt::format(", time budget {:g} s", *card.time_budget) : "";
   if (card.time_scale != 1.0) budget += fmt::format(", time limits x {:g}", card.time_scale);
+  if (card.time_calibration)
+    budget += fmt::format("{} (--time-scale auto: the reference workload took {:.3f} s here, {:.3f} s on the reference "
+                          "machine)", card.time_scale == 1.0 ? ", time limits x 1" : "",
+                          card.time_calibration->measured_seconds, card.time_calibration->reference_seconds);
   return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {}{})\n  the plugin claims: {}\n\n", card.plugin_name,
                      card.plugin, card.suite, checks, card.suite_path, budget, claims_text(card.claims));
 }

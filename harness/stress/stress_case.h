@@ -53,6 +53,7 @@ void add_geometry_cases(std::vector<StressCase>& cases);
 void add_grazing_slivers_case(std::vector<StressCase>& cases);  // geometry family, in its own file
 void add_robustness_cases(std::vector<StressCase>& cases);
 void add_scale_cases(std::vector<StressCase>& cases);
+void add_extreme_scale_case(std::vector<StressCase>& cases);  // scale family, in its own file
 void add_light_transport_cases(std::vector<StressCase>& cases);
 
 }  // namespace twinray::stress

@@ -20,6 +20,7 @@ const std::vector<StressCase>& all_cases() {
     add_grazing_slivers_case(c);
     add_robustness_cases(c);
     add_scale_cases(c);
+    add_extreme_scale_case(c);
     add_light_transport_cases(c);
     return c;
   }();

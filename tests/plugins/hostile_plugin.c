@@ -27,6 +27,13 @@
  *                 it with the byte 0xA5 every two milliseconds: sequence numbers, statuses and counts the
  *                 worker could never write. The build returns once the first fill is done, so the answer to
  *                 the build request is always one of them
+ *   EXIT_HANDLER_CRASH  registers an atexit handler in build that writes through a null pointer: everything
+ *                 answers, and a program that used it crashes as it ends
+ *   EXIT_HANDLER_HANG   registers an atexit handler in build that never returns
+ *   LATE_THREAD_CRASH   starts a detached thread in build that sleeps 100 ms and then crashes: a worker that
+ *                 dies between two calls, with no call of twinray's waiting for it
+ *   SPIN          starts two detached threads in build that spin forever (a busy-waiting thread pool that is
+ *                 never stopped): it answers everything, slowly on a busy machine, and ends with its worker
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -113,6 +120,37 @@ static void* scribble(void* arg) {
 }
 #endif
 
+#ifdef TWINRAY_HOSTILE_EXIT_HANDLER_CRASH
+static void crash_at_exit(void) { crash(); }
+#endif
+#ifdef TWINRAY_HOSTILE_EXIT_HANDLER_HANG
+static void hang_at_exit(void) {
+  struct timespec second;
+  second.tv_sec = 1;
+  second.tv_nsec = 0;
+  for (;;) nanosleep(&second, NULL);
+}
+#endif
+#ifdef TWINRAY_HOSTILE_SPIN
+static void* spin_forever(void* arg) {
+  volatile unsigned long spins = 0;
+  (void)arg;
+  for (;;) ++spins;
+  return NULL;
+}
+#endif
+#ifdef TWINRAY_HOSTILE_LATE_THREAD_CRASH
+static void* crash_later(void* arg) {
+  struct timespec pause;
+  (void)arg;
+  pause.tv_sec = 0;
+  pause.tv_nsec = 100000000L;
+  nanosleep(&pause, NULL);
+  crash();
+  return NULL;
+}
+#endif
+
 static int hostile_build(void* self, const twinray_geometry* geometry, char* error, size_t capacity) {
   (void)self;
   (void)geometry;
@@ -120,6 +158,30 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   (void)capacity;
 #ifdef TWINRAY_HOSTILE_BUILD_CRASH
   crash();
+#endif
+#ifdef TWINRAY_HOSTILE_EXIT_HANDLER_CRASH
+  atexit(crash_at_exit);
+#endif
+#ifdef TWINRAY_HOSTILE_EXIT_HANDLER_HANG
+  atexit(hang_at_exit);
+#endif
+#ifdef TWINRAY_HOSTILE_SPIN
+  {
+    pthread_t thread;
+    int t;
+    for (t = 0; t < 2; ++t)
+      if (pthread_create(&thread, NULL, spin_forever, NULL) == 0) pthread_detach(thread);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_LATE_THREAD_CRASH
+  {
+    pthread_t thread;
+    if (pthread_create(&thread, NULL, crash_later, NULL) != 0) {
+      write_message(error, capacity, "pthread_create failed");
+      return TWINRAY_ERROR;
+    }
+    pthread_detach(thread);
+  }
 #endif
 #ifdef TWINRAY_HOSTILE_BUILD_LOOP
   {

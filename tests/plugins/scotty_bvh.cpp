@@ -25,6 +25,34 @@
 //  16 MESH_INDEX_ID    a triangle's geom_id is its mesh's index in the geometry's array, not the mesh's geom_id:
 //                      right wherever meshes are numbered 0, 1, 2, ... with no sphere in between
 //
+// The third red-team round's bugs (what students and engineers write that the rounds above did not cover):
+//
+//  17 NEG_ZERO_SIGN     slab test with the near/far planes picked by `dir < 0`: a -0 component counts as
+//                       positive while its inverse is -inf, so the box is missed from inside its slab
+//  18 NAN_SLAB          no case for a zero direction component: an origin exactly on a box's plane gives
+//                       0 * inf = NaN, std::max(NaN, t0) keeps the NaN and `!(t0 <= t1)` rejects the box
+//  19 INDEX_16BIT       the primitive index kept in 16 bits: triangle 65536 + i is tested and reported as i
+//  20 STACK_32          a traversal stack of 32 entries that drops what does not fit: right on shallow trees
+//  21 ANYHIT_LEAF_BOX   any-hit answers "occluded" as soon as the ray enters a leaf's box
+//  22 MT_EPSILON        Moller-Trumbore with |det| < 1e-6 taken as parallel: small triangles and grazing rays
+//                       are missed (claims no watertightness: the test is not watertight)
+//  23 BACKFACE_UV       u and v swapped on hits from the back (the triangle "flipped to face the ray")
+//  24 LAST_RAY_CACHE    a ray from the same origin as the thread's previous ray starts with that ray's hit
+//                       distance (x 1.01) as its bound ("coherent rays hit at similar distances"): answers
+//                       depend on the rays traced before
+//  25 LEAK_PER_QUERY    every closest-hit query allocates a 64 KiB traversal stack with new[] and never frees it
+//  26 OVERFIT_SMALL     exact on scenes of up to 10,000 primitives (the size of the public quick suite's),
+//                       the first hit found on larger ones ("a fast mode for big scenes")
+//  27 RANDOM_SPLIT      the split axis chosen at random from the clock: a different, still correct tree on
+//                       every run
+//  28 SORTED_PRIM_ID    prim_id is the primitive's place in the builder's reordered array, not its index in
+//                       the mesh
+//  29 LEAF_SKIPS_LAST   leaves are scanned up to size - 1: the last primitive of every leaf is never tested
+//  30 SPHERE_UNIT_DIR   the sphere test assumes a unit direction (a = 1): t is right only when |dir| = 1
+//  31 EPSILON_TMIN      tmin ignored; hits need t > 1e-4 instead (the self-intersection epsilon)
+//  32 ANYHIT_NO_SPHERES any-hit tests triangles only
+//  33 INDEX_20BIT       the primitive index packed into 20 bits of the leaf: triangle 2^20 + i is i
+//
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
 // TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
@@ -35,6 +63,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -112,6 +141,18 @@ struct BBox {
 #if BUG(6)
       static const Slab slabs[3] = {slab_negative, nullptr, slab_positive};
       slabs[(ray.dir[a] > 0.0) - (ray.dir[a] < 0.0) + 1](min[a], max[a], ray.point[a], ray.inv_dir[a], t0, t1);
+#elif BUG(17)
+      const bool negative = ray.dir[a] < 0.0;  // false for -0, whose inverse is -inf
+      const double near = ((negative ? max[a] : min[a]) - ray.point[a]) * ray.inv_dir[a];
+      const double far = ((negative ? min[a] : max[a]) - ray.point[a]) * ray.inv_dir[a];
+      t0 = std::max(t0, near);
+      t1 = std::min(t1, far);
+#elif BUG(18)
+      double near = (min[a] - ray.point[a]) * ray.inv_dir[a];
+      double far = (max[a] - ray.point[a]) * ray.inv_dir[a];
+      if (near > far) std::swap(near, far);
+      t0 = std::max(near, t0);
+      t1 = std::min(far, t1);
 #else
       // A ray parallel to the slab is inside it or not at all. Left to the division, an origin exactly on a
       // face gives 0 * inf = NaN, and the slab would cut the ray away.
@@ -131,7 +172,11 @@ struct BBox {
     // Pad the exit by a few double ulps: a flat box (a grid in a plane) has entry == exit, and rounding must
     // not turn that into a miss.
     t1 *= 1.0 + 1e-12;
+#if BUG(18)
+    if (!(t0 <= t1)) return false;  // "NaN-safe"
+#else
     if (t0 > t1) return false;
+#endif
     times[0] = t0;
     times[1] = t1;
     return true;
@@ -151,6 +196,9 @@ double lowest_t(const Ray& ray) {
 #if BUG(5)
   (void)ray;
   return 0.0;
+#elif BUG(31)
+  (void)ray;
+  return 1e-4;
 #else
   return ray.tmin;
 #endif
@@ -163,6 +211,7 @@ struct Primitive {
   const twinray_sphere* sphere = nullptr;  // ...or this sphere
   twinray_id index = 0;                    // the triangle's index in its mesh
   twinray_id mesh_index = 0;               // its mesh's place in the geometry's mesh array
+  twinray_id slot = 0;                     // its place in the builder's (reordered) array, for bug 28
 
   Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(mesh->indices[3 * index + k])); }
 
@@ -205,6 +254,33 @@ struct Primitive {
   // Woop, Benthin, Wald: shear the triangle into the ray's space, then three edge functions whose signs
   // decide the hit. Computed from the same vertex values in the same order, the function of an edge shared
   // by two triangles is the exact negation of the other's, so no ray slips between them.
+#if BUG(22)
+  // Moller-Trumbore, as in the textbooks, with a fixed epsilon on the determinant.
+  Trace hit_triangle(const Ray& ray, double tmax) const {
+    Trace tr;
+    const Vec3 e1 = vertex(1) - vertex(0), e2 = vertex(2) - vertex(0);
+    const Vec3 p = cross(ray.dir, e2);
+    const double det = dot(e1, p);
+    if (std::fabs(det) < 1e-6) return tr;  // "parallel"
+    const double inv = 1.0 / det;
+    const Vec3 s0 = ray.point - vertex(0);
+    const double u = dot(s0, p) * inv;
+    if (u < 0.0 || u > 1.0) return tr;
+    const Vec3 q = cross(s0, e1);
+    const double v = dot(ray.dir, q) * inv;
+    if (v < 0.0 || u + v > 1.0) return tr;
+    const double t = static_cast<float>(dot(e2, q) * inv);
+    if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
+    tr.hit = true;
+    tr.t = t;
+    tr.u = static_cast<float>(u);
+    tr.v = static_cast<float>(v);
+    tr.geom = mesh->geom_id;
+    tr.prim = index;
+    tr.primitive = this;
+    return tr;
+  }
+#else
   Trace hit_triangle(const Ray& ray, double tmax) const {
     const Vec3& d = ray.dir;
     int kz = std::fabs(d.x) > std::fabs(d.y) ? (std::fabs(d.x) > std::fabs(d.z) ? 0 : 2) : (std::fabs(d.y) > std::fabs(d.z) ? 1 : 2);
@@ -226,17 +302,25 @@ struct Primitive {
     tr.t = t;
     tr.u = static_cast<float>(v / det);
     tr.v = static_cast<float>(w / det);
+#if BUG(23)
+    if (det < 0.0) std::swap(tr.u, tr.v);  // the back of the triangle: "flip it to face the ray"
+#endif
     tr.geom = BUG(16) ? mesh_index : mesh->geom_id;
-    tr.prim = index;
+    tr.prim = BUG(28) ? slot : index;
     tr.primitive = this;
     return tr;
   }
+#endif
 
   // Both roots of |o + t d - c| = r with the discriminant taken from the closest-approach vector (no
   // cancellation for far spheres) and the near root through Vieta (no cancellation for huge ones).
   Trace hit_sphere(const Ray& ray, double tmax) const {
     const Vec3 f = ray.point - load(sphere->center);
+#if BUG(30)
+    const double r = sphere->radius, a = 1.0, b = dot(f, ray.dir);  // "directions are normalised"
+#else
     const double r = sphere->radius, a = dot(ray.dir, ray.dir), b = dot(f, ray.dir);
+#endif
     const Vec3 l = f - (b / a) * ray.dir;
     const double disc = a * (r * r - dot(l, l));
     Trace tr;
@@ -292,18 +376,45 @@ class BVH {
     if (primitives_.empty()) return;
     nodes_.reserve(2 * primitives_.size());
     build_node(0, primitives_.size(), 0);
+    for (std::size_t k = 0; k < primitives_.size(); ++k) primitives_[k].slot = static_cast<twinray_id>(k);
   }
 
   // Closest hit; counts nodes whose box was tested and primitives tested.
   Trace hit(const Ray& ray, twinray_query_stats& stats) const {
     Trace closest;
     if (nodes_.empty()) return closest;
-    double root_times[2] = {lowest_t(ray), ray.tmax};
+#if BUG(24)
+    // The previous ray of this thread, if it came from the same point, says how far to look.
+    thread_local Vec3 last_origin{NAN, NAN, NAN};
+    thread_local double last_t = INFINITY;
+    const bool coherent = ray.point.x == last_origin.x && ray.point.y == last_origin.y && ray.point.z == last_origin.z;
+    const double bound = coherent ? std::min(ray.tmax, last_t * 1.01) : ray.tmax;
+    struct Remember {
+      const Ray& ray;
+      const Trace& closest;
+      ~Remember() {
+        last_origin = ray.point;
+        last_t = closest.hit ? closest.t : INFINITY;
+      }
+    } remember{ray, closest};
+#else
+    const double bound = ray.tmax;
+#endif
+#if BUG(25)
+    StackEntry* leaked = new StackEntry[65536 / sizeof(StackEntry)];  // "freed by the OS at exit"
+    std::memset(static_cast<void*>(leaked), 0, 65536 / sizeof(StackEntry) * sizeof(StackEntry));
+#endif
+#if BUG(26)
+    const bool fast_mode = primitives_.size() > 10000;
+#endif
+    double root_times[2] = {lowest_t(ray), bound};
     ++stats.nodes_visited;
     if (!nodes_[0].bbox.hit(ray, root_times)) return closest;
 #if BUG(8)
     std::vector<StackEntry>& stack = stack_;  // one stack for every thread
     if (stack.size() < kMaxDepth + 1) stack.resize(kMaxDepth + 1);
+#elif BUG(20)
+    std::array<StackEntry, 32> stack;  // "32 levels is more than any tree needs"
 #else
     std::array<StackEntry, kMaxDepth + 1> stack;
 #endif
@@ -320,9 +431,9 @@ class BVH {
       const Node& node = nodes_[e.node];
       if (node.is_leaf()) {
         std::size_t i = node.start;
-        while (i < node.start + node.size) {
+        while (i < node.start + node.size - (BUG(29) ? 1 : 0)) {
           ++stats.primitives_tested;
-          const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : ray.tmax);
+          const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : bound);
           if (!t.hit) {
             ++i;
             continue;
@@ -336,24 +447,34 @@ class BVH {
 #if BUG(1)
             return closest;
 #endif
+#if BUG(26)
+            if (fast_mode) return closest;
+#endif
           }
           ++i;
         }
         continue;
       }
-      const double limit = closest.hit ? closest.t * (1.0 + 1e-6) : ray.tmax;
+      const double limit = closest.hit ? closest.t * (1.0 + 1e-6) : bound;
       double tl[2] = {lowest_t(ray), limit}, tr[2] = {lowest_t(ray), limit};
       stats.nodes_visited += 2;
       const bool hl = nodes_[node.l].bbox.hit(ray, tl), hr = nodes_[node.r].bbox.hit(ray, tr);
       // Far child first, so that the near one is popped first.
+#if BUG(20)
+      const auto push = [&](const StackEntry& e) {
+        if (sp < stack.size()) stack[sp++] = e;  // full: dropped
+      };
+#else
+      const auto push = [&](const StackEntry& e) { stack[sp++] = e; };
+#endif
       if (hl && hr) {
         const bool left_near = tl[0] <= tr[0];
-        stack[sp++] = left_near ? StackEntry{node.r, tr[0], hits} : StackEntry{node.l, tl[0], hits};
-        stack[sp++] = left_near ? StackEntry{node.l, tl[0], hits} : StackEntry{node.r, tr[0], hits};
+        push(left_near ? StackEntry{node.r, tr[0], hits} : StackEntry{node.l, tl[0], hits});
+        push(left_near ? StackEntry{node.l, tl[0], hits} : StackEntry{node.r, tr[0], hits});
       } else if (hl) {
-        stack[sp++] = {node.l, tl[0], hits};
+        push({node.l, tl[0], hits});
       } else if (hr) {
-        stack[sp++] = {node.r, tr[0], hits};
+        push({node.r, tr[0], hits});
       }
     }
     return closest;
@@ -375,7 +496,13 @@ class BVH {
     while (sp > 0) {
       const Node& node = nodes_[stack[--sp]];
       if (node.is_leaf()) {
-        for (std::size_t i = node.start; i < node.start + node.size; ++i) {
+#if BUG(21)
+        return true;  // children are only pushed when their box is hit: "the leaf's box is hit, so it's occluded"
+#endif
+        for (std::size_t i = node.start; i < node.start + node.size - (BUG(29) ? 1 : 0); ++i) {
+#if BUG(32)
+          if (primitives_[i].sphere != nullptr) continue;  // shadows come from meshes
+#endif
           ++stats.primitives_tested;
           if (primitives_[i].hit(ray, tmax).hit) return true;
         }
@@ -431,8 +558,19 @@ class BVH {
     double best_cost = static_cast<double>(size) * box.surface_area();  // cost of a leaf
     int best_axis = -1;
     double best_split = 0.0;
+#if BUG(27)
+    // One axis, at random: "random splits are good enough"
+    static std::uint64_t state = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()) | 1;
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    const int random_axis = static_cast<int>(state % 3);
+#endif
     if (depth < kMaxDepth / 2) {
       for (int axis = 0; axis < 3; ++axis) {
+#if BUG(27)
+        if (axis != random_axis) continue;
+#endif
         const double lo = centroids.min[axis], extent = centroids.max[axis] - lo;
         if (!(extent > 0.0)) continue;
         std::array<BBox, kBuckets> buckets;
@@ -518,7 +656,13 @@ int scotty_build(void* self, const twinray_geometry* g, char* error, std::size_t
     std::vector<Primitive> prims;
     for (std::size_t m = 0; m < g->mesh_count; ++m)
       for (std::size_t i = 0; i < g->meshes[m].triangle_count; ++i)
+#if BUG(19)
+        prims.push_back({&g->meshes[m], nullptr, static_cast<std::uint16_t>(i), static_cast<twinray_id>(m)});
+#elif BUG(33)
+        prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i & 0xFFFFFu), static_cast<twinray_id>(m)});
+#else
         prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i), static_cast<twinray_id>(m)});
+#endif
     for (std::size_t s = 0; s < g->sphere_count; ++s) prims.push_back({nullptr, &g->spheres[s], 0, 0});
     static_cast<BVH*>(self)->build(std::move(prims));
     return TWINRAY_OK;
@@ -608,7 +752,7 @@ void scotty_build_stats(const void* self, twinray_build_stats* stats) {
 const twinray_plugin_v1 scotty_table = {
     TWINRAY_PLUGIN_ABI_VERSION,
     SCOTTY_NAME,
-    TWINRAY_PLUGIN_COUNTS_TRAVERSAL | TWINRAY_PLUGIN_HONOURS_TIES | TWINRAY_PLUGIN_WATERTIGHT,
+    TWINRAY_PLUGIN_COUNTS_TRAVERSAL | TWINRAY_PLUGIN_HONOURS_TIES | (BUG(22) ? 0u : TWINRAY_PLUGIN_WATERTIGHT),
     scotty_create,
     scotty_destroy,
     scotty_build,

@@ -1,10 +1,13 @@
 #include "backends/plugin/worker/crash_recorder.h"
 
+#include "backends/plugin/futex.h"
+
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdlib>
 
@@ -13,6 +16,7 @@ namespace twinray::plugin_worker {
 namespace {
 
 CrashRecord* g_record = nullptr;
+std::atomic<bool> g_clean_exit{false};
 // Constant-initialised, so reading it in a signal handler touches no lazily created state.
 thread_local std::int32_t t_role = kPluginThread;
 
@@ -44,6 +48,13 @@ void on_fatal_signal(int sig, siginfo_t* info, void*) {
 
 void on_exit_called() {
   const int saved_errno = errno;
+  if (g_clean_exit.load()) {  // the worker's own exit after destroy (expect_clean_exit)
+    if (g_record != nullptr) {
+      g_record->exit_handlers_done.store(1);
+      futex_wake_all(&g_record->exit_handlers_done);
+    }
+    return;
+  }
   if (claim(kCrashExit)) {
     g_record->thread.store(t_role);
     if (saved_errno == ENOMEM) g_record->allocation_failed.store(1);
@@ -59,13 +70,16 @@ void install_crash_recorder(CrashRecord& record) {
   action.sa_flags = SA_SIGINFO | SA_ONSTACK | SA_RESETHAND;
   sigfillset(&action.sa_mask);  // nothing interrupts the recording
   for (const int sig : kFatalSignals) sigaction(sig, &action, nullptr);
-  // The worker itself never calls exit() (it ends with _exit), so an atexit handler running means plugin code
-  // called exit(). _exit() from plugin code runs no handler; twinray then attributes it by the channel that was
+  // The worker itself calls exit() only after destroy (expect_clean_exit), so an atexit handler running before
+  // that means plugin code called exit(). Registered before the plugin is loaded, it runs after the plugin's
+  // own handlers. _exit() from plugin code runs no handler; twinray then attributes it by the channel that was
   // running plugin code.
   std::atexit(on_exit_called);
 }
 
 void set_thread_role(std::int32_t role) { t_role = role; }
+
+void expect_clean_exit() { g_clean_exit.store(true); }
 
 void install_alternate_signal_stack() {
   void* memory = mmap(nullptr, kAlternateStackBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

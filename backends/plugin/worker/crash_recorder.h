@@ -21,6 +21,10 @@ void install_crash_recorder(CrashRecord& record);
 // (the plugin's own) are recorded as kPluginThread.
 void set_thread_role(std::int32_t role);
 
+// The worker itself is about to call exit() (after destroy, so that the plugin's atexit handlers and static
+// destructors run as they would at the end of a program): from now on the atexit hook records nothing.
+void expect_clean_exit();
+
 // Gives the calling thread its own signal stack, so that the handler still runs (and the crash is attributed
 // to the thread's channel) when plugin code overflows the thread's stack.
 void install_alternate_signal_stack();

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -205,8 +206,13 @@ void QueryServer::run_destroy(Channel& c) {
   } catch (...) {
     std::abort();  // reported as an abort in stage "destroy"
   }
-  // _exit, not exit: no atexit handler (the crash recorder's would report an exit), no static destructors.
-  _exit(0);
+  // exit, not _exit: the plugin's atexit handlers and static destructors run, as at the end of any program that
+  // uses it, so one that crashes or hangs there is seen (twinray bounds the whole teardown by one call's limit
+  // and reads the exit status). Threads the plugin left running end with the process. The crash recorder's
+  // own atexit hook stands down; the query threads sleep on their channels and touch nothing exit() frees.
+  std::fflush(nullptr);
+  expect_clean_exit();
+  std::exit(0);
 }
 
 }  // namespace twinray::plugin_worker
