@@ -10,8 +10,11 @@
 #include "core/scene/procedural.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstdlib>
 #include <set>
 #include <stdexcept>
@@ -145,6 +148,74 @@ TEST(WideBvh, CollapseCostIsNoWorseThanKeepingEveryBinaryLeaf) {
   WideCollapseOptions dear_nodes;
   dear_nodes.node_cost = 8.0f;
   EXPECT_LE(collapse_to_wide(binary, dear_nodes).nodes.size(), merged.nodes.size());
+}
+
+// The collapse runs in TBB tasks over independent subtrees, each writing only its own places: one thread
+// and several must give the same bytes. 30000 triangles: about 20000 binary nodes, so the dynamic program
+// splits into tasks (4096 nodes or more) and the top wide nodes measure and emit their children in tasks
+// (4096 primitives or more); spheres too, for the leaf kinds.
+TEST(WideBvh, CollapseIsTheSameOnAnyNumberOfThreads) {
+  for (const SceneGeometry& g : {random_triangle_soup(30000, 3), mixed_spheres_and_triangles(3000, 20000, 4)}) {
+    const std::vector<Bounds3> bounds = primitive_bounds(g);
+    const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(g.triangle_count()), WideBuildOptions::default_binary());
+    ASSERT_GT(binary.nodes.size(), 8192u);
+    const auto collapse_on = [&](int threads) {
+      return tbb::task_arena(threads).execute([&] { return collapse_to_wide(binary, WideCollapseOptions{}); });
+    };
+    const WideTree one = collapse_on(1);
+    for (const int threads : {2, 4}) {
+      const WideTree many = collapse_on(threads);
+      ASSERT_EQ(one.nodes.size(), many.nodes.size()) << threads;
+      EXPECT_EQ(0, std::memcmp(one.nodes.data(), many.nodes.data(), one.nodes.size() * sizeof(WideNode))) << threads;
+      ASSERT_EQ(one.leaves.size(), many.leaves.size()) << threads;
+      for (std::size_t i = 0; i < one.leaves.size(); ++i) {
+        EXPECT_EQ(one.leaves[i].first_prim, many.leaves[i].first_prim) << i;
+        EXPECT_EQ(one.leaves[i].count, many.leaves[i].count) << i;
+        EXPECT_EQ(one.leaves[i].spheres, many.leaves[i].spheres) << i;
+      }
+      EXPECT_EQ(one.max_depth, many.max_depth);
+      EXPECT_EQ(one.sah_cost, many.sah_cost);
+    }
+  }
+}
+
+// The layout the emission computes from subtree sizes: the root first, each node's wide children one
+// contiguous block in slot order, placed right after everything its earlier siblings' subtrees hold (a
+// depth-first walk that appends each node's children as a block), and leaves numbered in node order.
+// Also: every binary primitive in exactly one leaf, and the depth is the tree's height.
+TEST(WideBvh, CollapseLaysOutChildBlocksDepthFirstAndLeavesInNodeOrder) {
+  const SceneGeometry g = random_triangle_soup(30000, 8);
+  const std::vector<Bounds3> bounds = primitive_bounds(g);
+  const BvhTree binary = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), WideBuildOptions::default_binary());
+  const WideTree tree = collapse_to_wide(binary, WideCollapseOptions{});
+  ASSERT_GT(tree.nodes.size(), 100u);
+
+  std::uint32_t next_node = 1;
+  std::size_t deepest = 0;
+  const auto walk = [&](const auto& self, std::uint32_t w, std::size_t depth) -> void {
+    deepest = std::max(deepest, depth);
+    std::vector<std::uint32_t> children;
+    for (const std::uint32_t ref : tree.nodes[w].child)
+      if (!WideRef::is_leaf(ref) && ref != 0) children.push_back(ref);
+    for (std::size_t c = 0; c < children.size(); ++c) ASSERT_EQ(children[c], next_node + c) << "children of node " << w;
+    next_node += static_cast<std::uint32_t>(children.size());
+    for (const std::uint32_t child : children) self(self, child, depth + 1);
+  };
+  walk(walk, 0, 1);
+  EXPECT_EQ(next_node, tree.nodes.size());
+  EXPECT_EQ(deepest, tree.max_depth);
+
+  std::uint32_t next_leaf = 0;
+  std::vector<int> covered(bounds.size(), 0);
+  for (const WideNode& node : tree.nodes)
+    for (const std::uint32_t ref : node.child)
+      if (WideRef::is_leaf(ref)) {
+        ASSERT_EQ(ref & ~WideRef::kLeafBit, next_leaf) << "leaves in node order";
+        const WideLeafRange& leaf = tree.leaves[next_leaf++];
+        for (std::uint32_t i = 0; i < leaf.count; ++i) ++covered[leaf.first_prim + i];
+      }
+  EXPECT_EQ(next_leaf, tree.leaves.size());
+  EXPECT_EQ(std::count(covered.begin(), covered.end(), 1), static_cast<std::ptrdiff_t>(covered.size()));
 }
 
 // Empty lanes of the leaves' last triangle blocks: the memory the collapse's padding_cost prices.

@@ -19,6 +19,7 @@ void BvhBackend::build(const SceneGeometry& geometry) {
 
   const std::size_t n_triangles = geometry.triangle_count();
   BvhTree tree = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_, isa_);
+  const double tree_cost = sah_cost(tree.nodes, options_);
 
   // Leaves appear in depth-first order with increasing ranges of prim_order; each is copied to its kind's
   // array in that order and its offset rebased to that array (primitive_gather.h).
@@ -43,7 +44,7 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   stats_.nodes = nodes_.size();
   stats_.leaves = tree.leaves;
   stats_.max_depth = tree.max_depth;
-  stats_.sah_cost = tree.sah_cost;
+  stats_.sah_cost = tree_cost;
   stats_.memory_bytes = nodes_.capacity() * sizeof(BvhNode) + prims_.memory_bytes();
   stats_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

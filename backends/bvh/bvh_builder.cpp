@@ -480,12 +480,29 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   const std::unique_ptr<BvhNode[]> nodes(new BvhNode[2 * refs.size() - 1]);
   Builder builder(refs, nodes.get(), second_kind_begin, options, isa);
   const std::size_t node_count = builder.build_tree(n, builder.info_of(refs.data(), 0, n));
-  tree.nodes.reserve(node_count);
-  builder.compact(0, 0, tree);
-
-  tree.prim_order.resize(refs.size());
-  for (std::size_t i = 0; i < refs.size(); ++i) tree.prim_order[i] = refs[i].id;
-  tree.sah_cost = sah_cost(tree.nodes, options);
+  // The compacting copy (one serial depth-first walk) and the primitive order are independent: on two or
+  // more threads the latter runs beside the former.
+  const auto compact = [&] {
+    tree.nodes.reserve(node_count);
+    builder.compact(0, 0, tree);
+  };
+  const auto order = [&] {
+    tree.prim_order.resize(refs.size());
+    const auto copy_ids = [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) tree.prim_order[i] = refs[i].id;
+    };
+    if (options.parallel && n >= kParallelRangeGrain)  // like the references above: no serial pass over N
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kRangeChunk),
+                        [&](const tbb::blocked_range<std::size_t>& r) { copy_ids(r.begin(), r.end()); });
+    else
+      copy_ids(0, n);
+  };
+  if (options.parallel) {
+    tbb::parallel_invoke(compact, order);
+  } else {
+    compact();
+    order();
+  }
   return tree;
 }
 

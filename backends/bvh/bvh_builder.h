@@ -22,7 +22,6 @@ struct BvhTree {
   std::vector<std::uint32_t> prim_order;
   std::size_t leaves = 0;
   std::size_t max_depth = 0;
-  double sah_cost = 0.0;               // expected cost per ray, in the units of the build options
 };
 
 // Builds a tree over `bounds` (primitive id = index). Primitives with id >= second_kind_begin are of a
@@ -34,7 +33,8 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
                   Isa isa = selected_isa());
 
 // SAH cost of a finished tree: traversal_cost per interior node and intersection_cost per primitive of a
-// leaf, each weighted by the node's surface area relative to the root's.
+// leaf, each weighted by the node's surface area relative to the root's. Not part of build_bvh(): the
+// bvh backend reports it, bvh8 reports its wide tree's cost instead and would pay a serial pass for nothing.
 double sah_cost(std::span<const BvhNode> nodes, const BvhBuildOptions& options);
 
 }  // namespace twinray

@@ -4,6 +4,10 @@
 #include "backends/bvh/primitive_gather.h"
 #include "backends/bvh/ray_order.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -23,27 +27,23 @@ void WideBackend::build(const SceneGeometry& geometry) {
   const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary, isa_);
   WideTree tree = collapse_to_wide(binary, options_.collapse);
 
-  // Leaves are gathered in the order the nodes name them, so siblings' primitives are neighbours too.
-  std::vector<LeafToGather> leaves;
-  leaves.reserve(tree.leaves.size());
-  for (const WideNode& node : tree.nodes)
-    for (const std::uint32_t child : node.child)
-      if (WideRef::is_leaf(child)) {
-        const WideLeafRange& leaf = tree.leaves[child & ~WideRef::kLeafBit];
-        leaves.push_back({leaf.first_prim, leaf.count, leaf.spheres});
-      }
+  // The collapse numbers the leaves in node order, so siblings' primitives are neighbours in the store too.
+  std::vector<LeafToGather> leaves(tree.leaves.size());
+  std::transform(tree.leaves.begin(), tree.leaves.end(), leaves.begin(),
+                 [](const WideLeafRange& leaf) { return LeafToGather{leaf.first_prim, leaf.count, leaf.spheres}; });
   const std::vector<std::uint32_t> offsets = gather_leaves(geometry, binary.prim_order, leaves, prims_);
-  std::size_t next_leaf = 0;
-  for (WideNode& node : tree.nodes)
-    for (std::uint32_t& child : node.child) {
-      if (!WideRef::is_leaf(child)) continue;
-      const LeafToGather& leaf = leaves[next_leaf];
-      const std::uint32_t first = leaf.spheres ? offsets[next_leaf] : offsets[next_leaf] / kTriangleBlockLanes;
-      ++next_leaf;
-      if (first > WideRef::kFirstMask)
-        throw std::length_error("bvh8: too many primitives for 25-bit leaf references (at most 2^25 blocks)");
-      child = WideRef::leaf(first, leaf.count, leaf.spheres);
-    }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t n = r.begin(); n < r.end(); ++n)
+      for (std::uint32_t& child : tree.nodes[n].child) {
+        if (!WideRef::is_leaf(child)) continue;
+        const std::uint32_t index = child & ~WideRef::kLeafBit;
+        const LeafToGather& leaf = leaves[index];
+        const std::uint32_t first = leaf.spheres ? offsets[index] : offsets[index] / kTriangleBlockLanes;
+        if (first > WideRef::kFirstMask)
+          throw std::length_error("bvh8: too many primitives for 25-bit leaf references (at most 2^25 blocks)");
+        child = WideRef::leaf(first, leaf.count, leaf.spheres);
+      }
+  });
   nodes_ = std::move(tree.nodes);
   nodes_.shrink_to_fit();
   bounds_ = binary.nodes.empty() ? Bounds3{} : Bounds3{binary.nodes[0].lo, binary.nodes[0].hi};

@@ -2,6 +2,9 @@
 
 #include "backends/bvh/primitive_store.h"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -26,6 +29,12 @@ namespace {
 
 constexpr int kW = kWideWidth;
 constexpr float kInf = std::numeric_limits<float>::infinity();
+// Binary subtrees of at least this many nodes are evaluated in TBB tasks: a node costs a few hundred
+// instructions, so a task holds about a million, far above what scheduling it costs.
+constexpr std::size_t kParallelNodes = 4096;
+// Wide nodes over at least this many primitives measure and emit their wide children in TBB tasks (a wide
+// node costs about a thousand instructions and covers about twenty primitives).
+constexpr std::uint32_t kParallelPrims = 4096;
 
 // What the dynamic program decided for one binary node.
 // Plan and Subtree have no member initialisers: one of each per binary node is allocated uninitialised
@@ -33,6 +42,9 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 struct Plan {
   std::array<float, kW + 1> cost;     // cost[j], j = 1..kW: as at most j slots (cost[0] = inf, never used)
   std::array<std::uint8_t, kW + 1> k;  // j >= 2: left gets k slots; 0: cost[j] = cost[j - 1]
+  // The smallest s with cost[s] == cost[s + 1] == ... == cost[kW] (more slots than s buy nothing), or 0
+  // when some cost is NaN (then nothing is known about the order of the costs). See split_of().
+  std::uint8_t flat_from;
   bool leaf;                           // as one slot: a leaf (else a wide node)
 };
 
@@ -41,16 +53,31 @@ struct Subtree {
   bool triangles, spheres;
   float area;
 };
-static_assert(std::is_trivially_default_constructible_v<Plan> && std::is_trivially_default_constructible_v<Subtree>,
+
+// The wide subtree rooted at a binary node that becomes a wide node: how many wide nodes (itself included)
+// and leaves it holds, how many of those leaves are its own slots, and its height in wide nodes. Written by
+// measure() for the binary nodes that become wide nodes only.
+struct WideSize {
+  std::uint32_t nodes, leaves, own_leaves, height;
+};
+static_assert(std::is_trivially_default_constructible_v<Plan> && std::is_trivially_default_constructible_v<Subtree> &&
+                  std::is_trivially_default_constructible_v<WideSize>,
               "new[] must not initialise them");
 
+// Three passes, each parallel over independent subtrees and each writing only its own entries, so the wide
+// tree does not depend on the thread count: the dynamic program bottom-up over the binary tree
+// (evaluate_subtree), then top-down over the wide nodes it chose, their sizes (measure), then the nodes
+// themselves, each written straight to the place the sizes give it (emit). The layout is the one a
+// depth-first emission that appends each node's wide children as one block gives (see emit()).
 class Collapser {
  public:
   Collapser(const BvhTree& binary, const WideCollapseOptions& o) : bin_(binary), o_(o) {}
 
   WideTree run() {
     const std::size_t n = bin_.nodes.size();
-    if (n != 0 && !bin_.prim_order.empty()) {
+    WideTree tree;
+    if (n == 0) return tree;
+    if (!bin_.prim_order.empty()) {
       const float root_area = Bounds3{bin_.nodes[0].lo, bin_.nodes[0].hi}.half_area();
       lane_penalty_ = o_.padding_cost * o_.block_cost * root_area / static_cast<float>(bin_.prim_order.size());
       // In double: a volume of float extents neither overflows nor underflows there. A flat scene has no
@@ -61,19 +88,24 @@ class Collapser {
     }
     sub_.reset(new Subtree[n]);
     plan_.reset(new Plan[n]);
-    // Children come after their parent in the depth-first array: a reverse sweep sees them first.
-    for (std::size_t i = n; i-- > 0;) evaluate(static_cast<std::uint32_t>(i));
+    evaluate_subtree(0, static_cast<std::uint32_t>(n));
 
-    WideTree tree;
-    if (n == 0) return tree;
     out_ = &tree;
-    tree.nodes.emplace_back();
     if (bin_.nodes[0].is_leaf()) {
       // A tree of one leaf: a root node with a single child.
+      tree.nodes.resize(1);
+      tree.leaves.resize(1);
       init_empty(tree.nodes[0]);
-      set_slot(0, 0, 0, 1);
+      set_box(tree.nodes[0], 0, bin_.nodes[0]);
+      tree.nodes[0].child[0] = WideRef::kLeafBit;
+      tree.leaves[0] = {sub_[0].first, sub_[0].count, sub_[0].spheres};
     } else {
-      emit(0, 0, 1);
+      size_.reset(new WideSize[n]);
+      const WideSize& root = measure(0);
+      tree.nodes.resize(root.nodes);
+      tree.leaves.resize(root.leaves);
+      tree.max_depth = root.height;
+      emit(0, 0, 1, 0, root.own_leaves);
     }
     const float root_area = sub_[0].area;
     // A one-leaf tree has no binary children to split between (split_cost would read past the plan): its
@@ -84,6 +116,19 @@ class Collapser {
   }
 
  private:
+  // Evaluates the binary subtree at `i`, which holds the nodes [i, end) (depth-first: a subtree is a
+  // contiguous range, its left child's subtree right after it and its right child's after that).
+  void evaluate_subtree(std::uint32_t i, std::uint32_t end) {
+    if (end - i < kParallelNodes) {
+      // Children come after their parent: a reverse sweep sees them first.
+      for (std::uint32_t j = end; j-- > i;) evaluate(j);
+      return;
+    }
+    const std::uint32_t right = bin_.nodes[i].second_child();  // an interior node: a leaf is one node
+    tbb::parallel_invoke([&] { evaluate_subtree(i + 1, right); }, [&] { evaluate_subtree(right, end); });
+    evaluate(i);
+  }
+
   void evaluate(std::uint32_t i) {
     const BvhNode& node = bin_.nodes[i];
     Subtree& s = sub_[i];
@@ -99,6 +144,7 @@ class Collapser {
       p.cost.fill(leaf_cost(s));
       p.cost[0] = kInf;
       p.k.fill(0);  // distribute() stops at j = 1
+      p.flat_from = std::isnan(p.cost[1]) ? 0 : 1;
       return;
     }
     const Subtree& l = sub_[i + 1];
@@ -108,23 +154,9 @@ class Collapser {
     s.triangles = l.triangles || r.triangles;
     s.spheres = l.spheres || r.spheres;
 
-    std::array<float, kW + 1> split{};
-    std::array<std::uint8_t, kW + 1> split_k{};
-    const Plan& pl = plan_[i + 1];
-    const Plan& pr = plan_[node.second_child()];
-    for (int j = 2; j <= kW; ++j) {
-      split[j] = kInf;
-      // A valid split even when no cost compares below infinity: coordinates near float's range give
-      // infinite or NaN areas, and k = 0 would send distribute() down the tree without end.
-      split_k[j] = 1;
-      for (int k = 1; k < j; ++k) {
-        const float c = pl.cost[k] + pr.cost[j - k];
-        if (c < split[j]) {
-          split[j] = c;
-          split_k[j] = static_cast<std::uint8_t>(k);
-        }
-      }
-    }
+    std::array<float, kW + 1> split;
+    std::array<std::uint8_t, kW + 1> split_k;
+    split_of(plan_[i + 1], plan_[node.second_child()], split, split_k);
     const bool may_be_leaf = s.count <= static_cast<std::uint32_t>(o_.max_leaf_size) && !(s.triangles && s.spheres);
     const float as_leaf = may_be_leaf ? leaf_cost(s) : kInf;
     const float as_node = o_.node_cost * s.area + split[kW];
@@ -133,6 +165,10 @@ class Collapser {
     p.cost[0] = kInf;
     p.k[0] = 0;
     p.cost[1] = std::min(as_leaf, as_node);
+    // Only cost[1] can be NaN here: cost[j] for j >= 2 is a copy of cost[j - 1] (k[j] = 0) or a split,
+    // which is never NaN and, when cost[j - 1] is not NaN, taken only when strictly below it. So without
+    // a NaN the row changes exactly where k[j] != 0.
+    int flat = std::isnan(p.cost[1]) ? 0 : 1;
     for (int j = 2; j <= kW; ++j) {
       if (p.cost[j - 1] <= split[j]) {
         p.cost[j] = p.cost[j - 1];
@@ -140,9 +176,37 @@ class Collapser {
       } else {
         p.cost[j] = split[j];
         p.k[j] = split_k[j];
+        if (flat != 0) flat = j;
       }
     }
     p.k[1] = split_k[kW];  // reused: how a wide node at i splits its 8 slots between left and right
+    p.flat_from = static_cast<std::uint8_t>(flat);
+  }
+
+  // split[j] = min over k in 1..j-1 of l.cost[k] + r.cost[j - k], j = 2..kW, and the first k (smallest)
+  // that attains it in split_k[j]. When no sum compares below infinity (coordinates near float's range
+  // give infinite or NaN areas), split[j] = inf and k = 1: still a valid split, where k = 0 would send
+  // distribute() down the tree without end.
+  // Only k <= l.flat_from is tried when neither plan holds a NaN: then both cost rows are non-increasing
+  // (cost[j] = min(cost[j - 1], ...)), so for k > s = l.flat_from the sum l.cost[s] + r.cost[j - k] is at
+  // least l.cost[s] + r.cost[j - s] (float addition is monotonic), which was tried before and never loses
+  // to it under the strict < below. Same minimum, same k, a quarter of the sums where the left child is a
+  // leaf (flat from 1), as it is for most nodes near the bottom of the tree.
+  static void split_of(const Plan& l, const Plan& r, std::array<float, kW + 1>& split,
+                       std::array<std::uint8_t, kW + 1>& split_k) {
+    const int k_max = l.flat_from != 0 && r.flat_from != 0 ? l.flat_from : kW - 1;
+    for (int j = 2; j <= kW; ++j) {
+      split[j] = kInf;
+      split_k[j] = 1;
+      const int last = std::min(j - 1, k_max);
+      for (int k = 1; k <= last; ++k) {
+        const float c = l.cost[k] + r.cost[j - k];
+        if (c < split[j]) {
+          split[j] = c;
+          split_k[j] = static_cast<std::uint8_t>(k);
+        }
+      }
+    }
   }
 
   static double volume(const BvhNode& node) {
@@ -180,6 +244,55 @@ class Collapser {
     distribute(bin_.nodes[i].second_child(), j - k, slots);
   }
 
+  // The binary nodes that become the slots of the wide node at binary node i, in the order distribute()
+  // finds them.
+  Slots slots_of(std::uint32_t i) const {
+    Slots slots;
+    const int k = plan_[i].k[1];
+    distribute(i + 1, k, slots);
+    distribute(bin_.nodes[i].second_child(), kW - k, slots);
+    return slots;
+  }
+
+  // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
+  void sort_by_weight(Slots& slots) const {
+    std::stable_sort(slots.node.begin(), slots.node.begin() + slots.count,
+                     [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
+  }
+
+  // Runs body(c) for c in [0, count): in TBB tasks when the wide node at binary node i covers many
+  // primitives, else in order on this thread.
+  template <class Body>
+  void for_children(std::uint32_t i, int count, const Body& body) const {
+    if (sub_[i].count >= kParallelPrims && count > 1)
+      tbb::parallel_for(0, count, 1, body);
+    else
+      for (int c = 0; c < count; ++c) body(c);
+  }
+
+  // Sizes the wide subtree rooted at binary node i (a wide node) and those of its wide children. The sizes
+  // do not depend on the order of the slots, so they are not sorted here.
+  const WideSize& measure(std::uint32_t i) {
+    const Slots slots = slots_of(i);
+    std::array<std::uint32_t, kW> inner;
+    int n_inner = 0;
+    WideSize size{1, 0, 0, 1};
+    for (int s = 0; s < slots.count; ++s) {
+      const std::uint32_t b = slots.node[static_cast<std::size_t>(s)];
+      if (plan_[b].leaf) ++size.own_leaves;
+      else inner[static_cast<std::size_t>(n_inner++)] = b;
+    }
+    for_children(i, n_inner, [&](int c) { measure(inner[static_cast<std::size_t>(c)]); });
+    size.leaves = size.own_leaves;
+    for (int c = 0; c < n_inner; ++c) {
+      const WideSize& child = size_[inner[static_cast<std::size_t>(c)]];
+      size.nodes += child.nodes;
+      size.leaves += child.leaves;
+      size.height = std::max(size.height, child.height + 1);
+    }
+    return size_[i] = size;
+  }
+
   static void init_empty(WideNode& node) {
     for (int a = 0; a < 3; ++a)
       for (int s = 0; s < kW; ++s) {
@@ -189,55 +302,66 @@ class Collapser {
     for (int s = 0; s < kW; ++s) node.child[s] = 0;
   }
 
-  // Writes binary node b into slot s of wide node w: a leaf, or (returns true) a wide node to emit.
-  bool set_slot(std::uint32_t w, int s, std::uint32_t b, std::size_t /*depth*/) {
-    WideNode& node = out_->nodes[w];
-    const BvhNode& bn = bin_.nodes[b];
+  static void set_box(WideNode& node, int s, const BvhNode& box) {
     for (int a = 0; a < 3; ++a) {
-      node.lo[a][s] = bn.lo[a];
-      node.hi[a][s] = bn.hi[a];
+      node.lo[a][s] = box.lo[a];
+      node.hi[a][s] = box.hi[a];
     }
-    if (plan_[b].leaf) {
-      const Subtree& sub = sub_[b];
-      node.child[s] = WideRef::kLeafBit | static_cast<std::uint32_t>(out_->leaves.size());
-      out_->leaves.push_back({sub.first, sub.count, sub.spheres});
-      return false;
-    }
-    return true;
   }
 
-  // Fills wide node w with the slots of binary node i, then its wide children, each group of siblings
-  // contiguous in the array (one node's children are fetched from neighbouring lines).
-  void emit(std::uint32_t i, std::uint32_t w, std::size_t depth) {
-    out_->max_depth = std::max(out_->max_depth, depth);
-    Slots slots;
-    const int k = plan_[i].k[1];
-    distribute(i + 1, k, slots);
-    distribute(bin_.nodes[i].second_child(), kW - k, slots);
-    // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
-    std::stable_sort(slots.node.begin(), slots.node.begin() + slots.count,
-                     [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
-
-    init_empty(out_->nodes[w]);
-    std::array<std::uint32_t, kW> inner{};
-    std::array<int, kW> inner_slot{};
+  // Writes the wide node of binary node i to nodes[w]. The layout is that of a depth-first emission that
+  // appends each node's wide children as one block (so siblings are fetched from neighbouring lines) and
+  // then emits them in slot order: the subtree of a wide node, less the node itself, is one run of the
+  // array (its children's block, then each child's run in turn). Leaves are numbered in node order, node by
+  // node and slot by slot: the order the backend stores their primitives in. `children_at` is where i's
+  // block of children goes, `own_leaves_at` the number of i's first leaf slot, `below_leaves_at` that of
+  // the first leaf of the nodes below i.
+  void emit(std::uint32_t i, std::uint32_t w, std::uint32_t children_at, std::uint32_t own_leaves_at,
+            std::uint32_t below_leaves_at) {
+    Slots slots = slots_of(i);
+    sort_by_weight(slots);
+    WideNode& node = out_->nodes[w];
+    init_empty(node);
+    std::array<std::uint32_t, kW> inner;
     int n_inner = 0;
-    for (int s = 0; s < slots.count; ++s)
-      if (set_slot(w, s, slots.node[static_cast<std::size_t>(s)], depth)) {
-        inner[static_cast<std::size_t>(n_inner)] = slots.node[static_cast<std::size_t>(s)];
-        inner_slot[static_cast<std::size_t>(n_inner++)] = s;
+    std::uint32_t leaf = own_leaves_at;
+    for (int s = 0; s < slots.count; ++s) {
+      const std::uint32_t b = slots.node[static_cast<std::size_t>(s)];
+      set_box(node, s, bin_.nodes[b]);
+      if (plan_[b].leaf) {
+        node.child[s] = WideRef::kLeafBit | leaf;
+        out_->leaves[leaf++] = {sub_[b].first, sub_[b].count, sub_[b].spheres};
+      } else {
+        node.child[s] = children_at + static_cast<std::uint32_t>(n_inner);
+        inner[static_cast<std::size_t>(n_inner++)] = b;
       }
-    const auto base = static_cast<std::uint32_t>(out_->nodes.size());
-    out_->nodes.resize(out_->nodes.size() + static_cast<std::size_t>(n_inner));
-    for (int c = 0; c < n_inner; ++c)
-      out_->nodes[w].child[inner_slot[static_cast<std::size_t>(c)]] = base + static_cast<std::uint32_t>(c);
-    for (int c = 0; c < n_inner; ++c) emit(inner[static_cast<std::size_t>(c)], base + static_cast<std::uint32_t>(c), depth + 1);
+    }
+    // Where each child's own children, own leaves and the leaves below it go.
+    std::array<std::uint32_t, kW> grandchildren_at, child_leaves_at, child_below_at;
+    std::uint32_t next_node = children_at + static_cast<std::uint32_t>(n_inner);
+    std::uint32_t next_own = below_leaves_at, next_below = below_leaves_at;
+    for (int c = 0; c < n_inner; ++c) next_below += size_[inner[static_cast<std::size_t>(c)]].own_leaves;
+    for (int c = 0; c < n_inner; ++c) {
+      const auto u = static_cast<std::size_t>(c);
+      const WideSize& child = size_[inner[u]];
+      grandchildren_at[u] = next_node;
+      child_leaves_at[u] = next_own;
+      child_below_at[u] = next_below;
+      next_node += child.nodes - 1;
+      next_own += child.own_leaves;
+      next_below += child.leaves - child.own_leaves;
+    }
+    for_children(i, n_inner, [&](int c) {
+      const auto u = static_cast<std::size_t>(c);
+      emit(inner[u], children_at + static_cast<std::uint32_t>(c), grandchildren_at[u], child_leaves_at[u], child_below_at[u]);
+    });
   }
 
   const BvhTree& bin_;
   const WideCollapseOptions& o_;
   std::unique_ptr<Subtree[]> sub_;  // per binary node, all written by evaluate()
   std::unique_ptr<Plan[]> plan_;
+  std::unique_ptr<WideSize[]> size_;  // per binary node, written by measure() for the wide nodes only
   WideTree* out_ = nullptr;
   float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
   double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume

@@ -62,7 +62,8 @@ struct WideLeafRange {
 
 struct WideTree {
   // nodes[0] is the root. Leaf children are written as WideRef::kLeafBit | index into `leaves`, for the
-  // backend to replace with references into its primitive store.
+  // backend to replace with references into its primitive store. Leaves are numbered in node order (node
+  // by node, slot by slot), the order in which the backend stores their primitives.
   std::vector<WideNode> nodes;
   std::vector<WideLeafRange> leaves;
   std::size_t max_depth = 0;
@@ -70,6 +71,7 @@ struct WideTree {
 };
 
 // Throws std::invalid_argument for out-of-range options. An empty binary tree gives an empty wide tree.
+// Runs in TBB tasks over independent subtrees; the tree is the same on any number of threads.
 void validate(const WideCollapseOptions& options);
 WideTree collapse_to_wide(const BvhTree& binary, const WideCollapseOptions& options);
 
