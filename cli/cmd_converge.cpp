@@ -112,16 +112,16 @@ int run_converge(const ConvergeCommandOptions& opt) {
       fmt::print("reference    {} (cached)\n", cached.string());
       reference = rgb_of(read_image(cached));
     } else {
-      fmt::print("reference    rendering {} spp with embree into {}\n", rs.spp, cached.string());
+      fmt::print("reference    rendering {} spp with {} into {}\n", rs.spp, converge::kReferenceBackend, cached.string());
       std::fflush(stdout);
       const converge::StrategySpec mis{"mis", SamplingStrategy::Mis, true, false};
-      reference = converge::render_image(scene, "embree", mis, rs.spp, rs.max_depth, rs.rr_depth, rs.seed,
+      reference = converge::render_image(scene, converge::kReferenceBackend, mis, rs.spp, rs.max_depth, rs.rr_depth, rs.seed,
                                          &study.reference_seconds);
       std::filesystem::create_directories(cached.parent_path());
       write_exr(cached, reference);
       std::filesystem::path sidecar = cached;
       sidecar.replace_extension(".json");
-      const nlohmann::json j = {{"scene", std::filesystem::absolute(opt.scene).string()}, {"spp", rs.spp},
+      const nlohmann::json j = {{"scene", std::filesystem::absolute(opt.scene).string()}, {"backend", converge::kReferenceBackend}, {"spp", rs.spp},
                                 {"max_depth", rs.max_depth}, {"rr_depth", rs.rr_depth}, {"seed", rs.seed},
                                 {"backend", "embree"}, {"strategy", "mis"}, {"version", converge::kReferenceVersion},
                                 {"seconds", study.reference_seconds}};
