@@ -1,6 +1,7 @@
 #include "harness/crosscheck/ray_generation.h"
 
 #include "harness/crosscheck/axis_rays.h"
+#include "harness/crosscheck/ray_set_support.h"
 
 #include "core/camera/pinhole_camera.h"
 #include "core/geometry/ray_offset.h"
@@ -16,13 +17,6 @@
 namespace twinray::crosscheck {
 
 namespace {
-
-glm::vec2 next2(Rng& rng) { return {rng.next_float(), rng.next_float()}; }
-
-glm::vec3 random_point_in(const Bounds3& b, Rng& rng) {
-  const glm::vec3 u{rng.next_float(), rng.next_float(), rng.next_float()};
-  return b.lo + u * (b.hi - b.lo);
-}
 
 // The scene box grown by 10% of its diagonal on every side, so uniform rays also start outside it.
 // A flat or point-like scene still gets a box of positive volume. Nothing absolute: a scene of size 1e-30
@@ -158,8 +152,8 @@ std::vector<Ray> generate_rays(RayKind kind, const Scene& scene, const Backend& 
       // From a random point of the padded box toward another: every ray crosses the scene's bounds.
       while (rays.size() < count) {
         Ray r;
-        r.org = random_point_in(box, rng);
-        r.dir = random_point_in(box, rng) - r.org;
+        r.org = point_in(box, rng);
+        r.dir = point_in(box, rng) - r.org;
         // Exactly zero, and normalised in double: for a scene at 1e-30 the float squared length is 0.
         if (r.dir == glm::vec3(0.0f)) continue;
         r.dir = glm::vec3(glm::normalize(glm::dvec3(r.dir)));
@@ -185,7 +179,7 @@ std::vector<Ray> generate_rays(RayKind kind, const Scene& scene, const Backend& 
       while (rays.size() < count && surfaces.next(sp)) {
         glm::vec3 target;
         if (emitters.empty()) {
-          target = random_point_in(box, rng);
+          target = point_in(box, rng);
         } else {
           // The target is lifted off the emitter toward the shading point, so the segment [0, 1] ends
           // just before the emitter's own surface without any global epsilon.

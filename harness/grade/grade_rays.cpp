@@ -22,8 +22,6 @@ namespace {
 using crosscheck::next2;
 using crosscheck::point_in;
 using crosscheck::signed_zero;
-Bounds3 scene_box(const Scene& scene) { return crosscheck::scene_box_or_unit(scene); }
-Bounds3 padded(const Bounds3& b, float fraction) { return crosscheck::padded_box(b, fraction); }
 
 Ray make(const glm::vec3& org, const glm::vec3& dir, float tmin = 0.0f, float tmax = INFINITY) {
   Ray r;
@@ -117,7 +115,7 @@ class VertexNormals {
 std::vector<Ray> watertight_rays(const Scene& scene, std::size_t count, std::uint64_t seed,
                                  std::optional<glm::vec3> origin) {
   Rng rng = Rng::keyed(seed, 0x3a7e, 2);
-  const Bounds3 box = scene_box(scene);
+  const Bounds3 box = crosscheck::scene_box_or_unit(scene);
   const glm::vec3 inside = origin.value_or(box.center());
   const float reach = 2.0f * std::max(box.diagonal(), 1e-3f);
   std::vector<Ray> rays;
@@ -182,7 +180,7 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
 
 std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t seed) {
   Rng rng = Rng::keyed(seed, 0x71e5, 4);
-  const Bounds3 around = padded(scene_box(scene), 0.5f);
+  const Bounds3 around = crosscheck::padded_box(crosscheck::scene_box_or_unit(scene), 0.5f);
   std::vector<Ray> rays;
   const auto& meshes = scene.geometry.meshes;
   if (meshes.empty()) return rays;
