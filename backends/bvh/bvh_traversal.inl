@@ -87,6 +87,9 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   float tmax = ray.tmax;          // shrinks to the best hit's t
   bool best_is_sphere = false;
   std::uint32_t best_index = 0;   // into the store's array of the best hit's kind
+  // The best triangle's crossing as its t test computed it, for its u, v at the end (triangle_block.h).
+  [[maybe_unused]] refine_detail::Crossing best_crossing;
+  [[maybe_unused]] bool best_crossing_kept = false;
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
@@ -106,21 +109,22 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     prims_tested += count;
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
       for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
-        BlockHits found;
-        // t only: the winner's u, v are computed once, at the end.
-        unsigned hits = intersect_triangle_block_t(tri_ray, prims.block_of(slot), lane_mask(first + count - slot),
-                                                   ray.tmin, tmax, found);
-        for (; hits != 0; hits &= hits - 1) {
-          const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
-          const PrimitiveKey key = prims.triangle_keys[slot + lane];
-          if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
-          hit.t = tmax = found.t[lane];
-          box_tmax = cull_max(tmax);
-          hit.geom_id = key.geom_id;
-          hit.prim_id = key.prim_id;
-          best_is_sphere = false;
-          best_index = slot + lane;
-        }
+        // t only: the winner's u, v are computed once, at the end, from its kept crossing.
+        intersect_triangle_block_closest(
+            tri_ray, prims.block_of(slot), lane_mask(first + count - slot), ray.tmin, tmax,
+            [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
+              const PrimitiveKey key = prims.triangle_keys[slot + lane];
+              if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
+              hit.t = tmax = t;
+              box_tmax = cull_max(tmax);
+              hit.geom_id = key.geom_id;
+              hit.prim_id = key.prim_id;
+              best_is_sphere = false;
+              best_index = slot + lane;
+              best_crossing_kept = crossing != nullptr;
+              if (crossing != nullptr) best_crossing = *crossing;
+              return tmax;
+            });
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count; ++i) {
@@ -150,7 +154,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
     triangle_block_hit_attributes(tri_ray, prims.block_of(best_index), best_index % kTriangleBlockLanes, hit.t, hit.u,
-                                  hit.v, hit.ng);
+                                  hit.v, hit.ng, best_crossing_kept ? &best_crossing : nullptr);
   }
   return true;
 }

@@ -50,9 +50,13 @@ template <Report kReport>
   return hits;
 }
 
-template <Report kReport>
-[[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
-                                                 float tmin, float tmax, BlockHits& out) {
+// What the float edge test says of the lanes in `lanes`: those it accepts (`candidates`), and those whose
+// edge functions cannot decide (`exact_zero`, for decide_in_double).
+struct EdgeLanes {
+  unsigned candidates, exact_zero;
+};
+
+[[gnu::always_inline]] inline EdgeLanes edge_test(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes) {
   const auto row = [&](int vert, int axis) { return _mm_load_ps(block.v[vert][axis]); };
   const __m128 ox = _mm_set1_ps(ray.ox), oy = _mm_set1_ps(ray.oy), oz = _mm_set1_ps(ray.oz);
   const __m128 sx = _mm_set1_ps(ray.sx), sy = _mm_set1_ps(ray.sy);
@@ -81,7 +85,13 @@ template <Report kReport>
   const __m128 any_negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
   const __m128 any_positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
   const unsigned mixed_signs = static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(any_negative, any_positive)));
-  unsigned candidates = lanes & ~exact_zero & ~mixed_signs;
+  return {lanes & ~exact_zero & ~mixed_signs, exact_zero};
+}
+
+template <Report kReport>
+[[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
+                                                 float tmin, float tmax, BlockHits& out) {
+  const auto [candidates, exact_zero] = edge_test(ray, block, lanes);
   if ((candidates | exact_zero) == 0) return 0;  // the common case: the ray passes beside all four
 
   // The candidates' edge functions are non-zero, not NaN and of one sign, so their determinant is not 0: the
@@ -126,15 +136,55 @@ template <Report kReport>
   return triangle_block_detail::intersect<triangle_block_detail::Report::kT>(ray, block, lanes, tmin, tmax, out);
 }
 
+// Closest hit: calls `on_hit(lane, t, crossing)` for every lane hit within [tmin, tmax], t correctly rounded
+// as above, and continues with the tmax it returns (the caller's closest t so far: the interval stays closed,
+// so a tie still reaches the caller, whose order decides it). `crossing` is what the refinement of t computed
+// (refine_detail::Crossing: e1, e2, e1 x e2, den), for the caller to keep if the lane is its best so far and
+// give to triangle_block_hit_attributes at the end, which then need not compute it again; nullptr for a lane
+// decided in double (a ray through an edge or vertex), whose attributes are computed from the block.
+template <typename OnHit>
+[[gnu::always_inline]] inline void intersect_triangle_block_closest(const TriangleRay& ray, const TriangleBlock& block,
+                                                                    unsigned lanes, float tmin, float tmax,
+                                                                    const OnHit& on_hit) {
+  using namespace triangle_block_detail;
+  const auto [candidates, exact_zero] = edge_test(ray, block, lanes);
+  if ((candidates | exact_zero) == 0) return;
+  for (unsigned m = candidates; m != 0; m &= m - 1) {
+    const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
+    refine_detail::Crossing crossing;
+    float t;
+    if (!refine_detail::refine_t(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), tmin,
+                                 tmax, t, crossing, [&ray, &block, lane](float& te, float& ue, float& ve) {
+                                   return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+                                 }))
+      continue;
+    tmax = on_hit(lane, t, &crossing);
+  }
+  if (exact_zero != 0) {
+    BlockHits found;
+    for (unsigned m = decide_in_double<Report::kT>(ray, block, exact_zero, tmin, tmax, found); m != 0; m &= m - 1) {
+      const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
+      tmax = on_hit(lane, found.t[lane], static_cast<const refine_detail::Crossing*>(nullptr));
+    }
+  }
+}
+
 // u, v and the geometric normal of lane `lane`'s crossing at the t a block test reported for it (what
-// triangle_hit_attributes gives for the same triangle): a closest-hit traversal's winner.
+// triangle_hit_attributes gives for the same triangle): a closest-hit traversal's winner. From `kept`, the
+// crossing intersect_triangle_block_closest gave with that t, when there is one; from the block otherwise.
 [[gnu::always_inline]] inline void triangle_block_hit_attributes(const TriangleRay& ray, const TriangleBlock& block,
                                                                  unsigned lane, float t, float& u, float& v,
-                                                                 glm::vec3& ng) {
+                                                                 glm::vec3& ng,
+                                                                 const refine_detail::Crossing* kept = nullptr) {
+  const auto exact = [&ray, &block, lane](float& te, float& ue, float& ve) {
+    return triangle_block_detail::exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+  };
+  if (kept != nullptr) {
+    refine_detail::refine_uv_kept(ray.refine, *kept, t, u, v, &ng, exact);
+    return;
+  }
   refine_detail::refine_uv(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), t, u, v,
-                           &ng, [&ray, &block, lane](float& te, float& ue, float& ve) {
-                             return triangle_block_detail::exact_crossing_of_lane(ray, block, lane, te, ue, ve);
-                           });
+                           &ng, exact);
 }
 
 // Whether any lane is hit within [tmin, tmax] (a non-zero mask of one of them): any-hit queries. A crossing

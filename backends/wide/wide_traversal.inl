@@ -97,6 +97,9 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
   float tmax = ray.tmax;  // shrinks to the best hit's t
   bool best_is_sphere = false;
   std::uint32_t best_index = 0;  // into the store's array of the best hit's kind
+  // The best triangle's crossing as its t test computed it, for its u, v at the end (triangle_block.h).
+  [[maybe_unused]] refine_detail::Crossing best_crossing;
+  [[maybe_unused]] bool best_crossing_kept = false;
   alignas(32) float entry[kWideWidth];
 
   // Boxes are tested against the widened interval of cull_interval.h, primitives against the ray's own.
@@ -118,21 +121,22 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
         const std::uint32_t first_slot = first * kTriangleBlockLanes;
         for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
-          BlockHits found;
-          // t only: the winner's u, v are computed once, at the end.
-          unsigned hits = intersect_triangle_block_t(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                                     lane_mask(count - k), ray.tmin, tmax, found);
-          for (; hits != 0; hits &= hits - 1) {
-            const unsigned lane = static_cast<unsigned>(__builtin_ctz(hits));
-            const std::uint32_t slot = first_slot + k + lane;
-            const PrimitiveKey key = prims.triangle_keys[slot];
-            if (!precedes(found.t[lane], key.geom_id, key.prim_id, hit)) continue;
-            hit.t = tmax = found.t[lane];
-            hit.geom_id = key.geom_id;
-            hit.prim_id = key.prim_id;
-            best_is_sphere = false;
-            best_index = slot;
-          }
+          // t only: the winner's u, v are computed once, at the end, from its kept crossing.
+          intersect_triangle_block_closest(
+              tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(count - k), ray.tmin, tmax,
+              [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
+                const std::uint32_t slot = first_slot + k + lane;
+                const PrimitiveKey key = prims.triangle_keys[slot];
+                if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
+                hit.t = tmax = t;
+                hit.geom_id = key.geom_id;
+                hit.prim_id = key.prim_id;
+                best_is_sphere = false;
+                best_index = slot;
+                best_crossing_kept = crossing != nullptr;
+                if (crossing != nullptr) best_crossing = *crossing;
+                return tmax;
+              });
         }
       } else if constexpr (kSpheres) {
         for (std::uint32_t i = first; i < first + count; ++i) {
@@ -162,7 +166,8 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
   } else if constexpr (kTriangles) {
     triangle_block_hit_attributes(tri_ray, prims.triangle_blocks[best_index / kTriangleBlockLanes],
-                                  best_index % kTriangleBlockLanes, hit.t, hit.u, hit.v, hit.ng);
+                                  best_index % kTriangleBlockLanes, hit.t, hit.u, hit.v, hit.ng,
+                                  best_crossing_kept ? &best_crossing : nullptr);
   }
   return true;
 }

@@ -160,6 +160,7 @@ struct Crossing {
   Vec4 n;  // e1 x e2
   Quotient quotient;
   double num = 0.0, num_err = 0.0;  // a.n and its bound
+  bool den_certain = false;  // whether `quotient` holds (crossing() returned true)
 };
 
 // e1 x e2 and its absolute terms: (|e1_j e2_k| + |e1_k e2_j|)_i.
@@ -186,7 +187,8 @@ TWINRAY_REFINE_INLINE bool crossing(const RefineRay& ray, const Vec4& p0, const 
   q.abs_den = std::fabs(s.v[0]);
   c.num = s.v[2];
   c.num_err = kSumBound * s.v[3];
-  if (!(q.abs_den > 2.0 * q.den_err)) return false;
+  c.den_certain = q.abs_den > 2.0 * q.den_err;
+  if (!c.den_certain) return false;
   q.r = 1.0 / s.v[0];
   q.w = q.r * q.r * (1.0 + 2.0 * q.den_err * std::fabs(q.r));
   return true;
@@ -293,11 +295,12 @@ template <typename Vec3>
 // The crossing parameter of the line o + t d with triangle (p0, p1, p2), which the caller's edge test has
 // accepted: false when there is no crossing (see above) or its correctly rounded t lies outside
 // [tmin, tmax]; otherwise the correctly rounded t. Inputs are doubles holding floats; `exact(t, u, v)` is
-// the exact path for the same triangle.
+// the exact path for the same triangle. `c` is left holding the crossing (e1, e2, a, e1 x e2, den): a
+// closest-hit traversal keeps the winner's and certifies its u, v from it (refine_uv_kept) instead of
+// computing the same numbers again.
 template <typename Exact>
-TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
-                                      float tmin, float tmax, float& t_out, const Exact& exact) {
-  Crossing c;
+TWINRAY_REFINE_INLINE bool refine_t_kept_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
+                                           float tmin, float tmax, float& t_out, Crossing& c, const Exact& exact) {
   float t = 0.0f;
   bool certain = false;
   if (crossing(ray, p0, p1, p2, c)) {
@@ -315,6 +318,12 @@ TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, cons
   if (!(t >= tmin && t <= tmax)) return false;
   t_out = t;
   return true;
+}
+template <typename Exact>
+TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
+                                      float tmin, float tmax, float& t_out, const Exact& exact) {
+  Crossing c;
+  return refine_t_kept_v(ray, p0, p1, p2, tmin, tmax, t_out, c, exact);
 }
 
 // Whether that correctly rounded t lies in [tmin, tmax], without the t itself (any-hit queries): an
@@ -335,18 +344,25 @@ TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4
   return refine_t_v(ray, p0, p1, p2, tmin, tmax, t, exact);
 }
 
-// The barycentrics (u weights p1, v weights p2) of that crossing, correctly rounded after clamping to
-// [0, 1]; `t` is what refine_t_v returned for the same inputs. Kept apart so that a closest-hit traversal
-// computes them once, for the winner; with its geometric normal when `ng` is given (from the same e1 x e2).
+// The barycentrics (u weights p1, v weights p2) of a crossing `c` that refine_t_v left, correctly rounded
+// after clamping to [0, 1]; `t` is what refine_t_v returned with it. Kept apart so that a closest-hit
+// traversal computes them once, for the winner; with its geometric normal when `ng` is given (from the same
+// e1 x e2).
+template <typename Exact>
+TWINRAY_REFINE_INLINE void refine_uv_kept(const RefineRay& ray, const Crossing& c, float t, float& u, float& v,
+                                          glm::vec3* ng, const Exact& exact) {
+  if (ng != nullptr) *ng = unit_normal(c.n.v[0], c.n.v[1], c.n.v[2]);
+  if (c.den_certain && certify_barycentrics(ray, c, t, u, v)) return;
+  float t_exact;
+  exact(t_exact, u, v);
+}
+// The same from the vertices, when the crossing was not kept: crossing() gives the same numbers again.
 template <typename Exact>
 TWINRAY_REFINE_INLINE void refine_uv_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2, float t,
                                        float& u, float& v, glm::vec3* ng, const Exact& exact) {
   Crossing c;
-  const bool den_certain = crossing(ray, p0, p1, p2, c);
-  if (ng != nullptr) *ng = unit_normal(c.n.v[0], c.n.v[1], c.n.v[2]);
-  if (den_certain && certify_barycentrics(ray, c, t, u, v)) return;
-  float t_exact;
-  exact(t_exact, u, v);
+  crossing(ray, p0, p1, p2, c);
+  refine_uv_kept(ray, c, t, u, v, ng, exact);
 }
 
 // The entry points, for vertices and rays given as glm vectors of floats (the leaf tests) or of doubles
@@ -357,6 +373,11 @@ TWINRAY_REFINE_INLINE void set_ray(RefineRay& ray, const Vec3& o, const Vec3& d)
   ray.o = load(o);
   ray.d = load(d);
   ray.abs_d = abs(ray.d);
+}
+template <typename Vec3, typename Exact>
+TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
+                                    float tmax, float& t, Crossing& kept, const Exact& exact) {
+  return refine_t_kept_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, kept, exact);
 }
 template <typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
@@ -378,6 +399,18 @@ TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const 
                                     float tmax, float& t) {
   return refine_t(ray, p0, p1, p2, tmin, tmax, t,
                   [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+template <typename Vec3>
+TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
+                                    float tmax, float& t, Crossing& kept) {
+  return refine_t(ray, p0, p1, p2, tmin, tmax, t, kept,
+                  [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+}
+template <typename Vec3>
+TWINRAY_REFINE_INLINE void refine_uv_kept(const RefineRay& ray, const Crossing& kept, const Vec3& p0, const Vec3& p1,
+                                          const Vec3& p2, float t, float& u, float& v, glm::vec3* ng) {
+  refine_uv_kept(ray, kept, t, u, v, ng,
+                 [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
