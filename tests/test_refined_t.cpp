@@ -5,8 +5,11 @@
 #include "backends/brute/brute_backend.h"
 #include "backends/bvh/bvh_backend.h"
 #include "backends/exact/exact_backend.h"
+#include "backends/wide/wide_backend.h"
 #include "core/exact/exact_number.h"
 #include "core/exact/exact_triangle.h"
+#include "core/intersect/triangle_refine.h"
+#include "core/intersect/triangle_watertight.h"
 #include "core/intersect/woop_axes.h"
 #include "core/sampling/rng.h"
 #include "core/scene/scene_loader.h"
@@ -119,6 +122,63 @@ TEST(RefinedT, IssueSponzaRayReplaysWithTheExactT) {
     EXPECT_EQ(hit.prim_id, 32639u) << backend->name();
     EXPECT_TRUE(same_bits(hit.t, c.t)) << backend->name() << " t " << hit.t;
     EXPECT_TRUE(same_bits(hit.u, c.u) && same_bits(hit.v, c.v)) << backend->name();
+  }
+}
+
+// A closest-hit query certifies the winner's u, v from the crossing its t test computed (the kept crossing of
+// triangle_refine.h), so the attributes must be those of the final winner, not of a candidate it superseded or
+// of a tied loser found after it: stacked planes hit far to near (the mesh order brute follows), two coplanar
+// triangles of different shape at the nearest plane (equal t, so the lower prim id wins, with its own u, v),
+// and straight-down rays on which that t is a rounding tie (1 + 2^-24: the exact path decides t, and u, v
+// then come from the kept crossing). Every hit equals the exact backend's, bit for bit.
+TEST(RefinedT, ClosestHitAttributesAreTheFinalWinners) {
+  constexpr float kTieZ = -0x1p-24f;  // t = 1 + 2^-24 from z = 1 straight down
+  SceneGeometry geometry;
+  TriangleMesh mesh;
+  const auto add = [&mesh](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), {a, b, c});
+    mesh.indices.push_back({first, first + 1, first + 2});
+  };
+  for (const float z : {-0.75f, -0.5f, -0.25f}) add({-1.0f, -1.0f, z}, {3.0f, -1.0f, z}, {-1.0f, 3.0f, z});
+  add({-1.0f, -1.0f, kTieZ}, {3.0f, -1.0f, kTieZ}, {-1.0f, 3.0f, kTieZ});  // prim 3: the winner of the tie
+  add({3.0f, 3.0f, kTieZ}, {-2.0f, 0.5f, kTieZ}, {0.5f, -2.0f, kTieZ});   // prim 4: coplanar, other vertices
+  geometry.meshes.push_back(mesh);
+  std::vector<Ray> rays;
+  Rng rng(11, 0);
+  for (int i = 0; i < 200; ++i) {
+    Ray r;
+    r.org = glm::vec3(0.25f + 0.5f * rng.next_float(), 0.25f + 0.5f * rng.next_float(), 1.0f);
+    r.dir = i % 2 == 0 ? glm::vec3(0.0f, 0.0f, -1.0f)
+                       : glm::vec3(0.2f * rng.next_float() - 0.1f, 0.2f * rng.next_float() - 0.1f, -1.0f);
+    rays.push_back(r);
+  }
+  const std::unique_ptr<Backend> exact_backend = make_exact_backend();
+  exact_backend->build(geometry);
+  std::vector<Hit> expected(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_TRUE(exact_backend->intersect(rays[i], expected[i]));
+    ASSERT_EQ(expected[i].prim_id, 3u);
+    if (i % 2 == 0) {
+      ASSERT_EQ(expected[i].t, 1.0f);  // the tie, rounded to even
+    }
+  }
+  for (const std::unique_ptr<Backend>& backend : {make_bvh_backend(), make_wide_backend(), make_brute_backend()}) {
+    backend->build(geometry);
+    const std::uint64_t fallbacks_before = refine_detail::exact_fallbacks.load();
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      Hit hit;
+      ASSERT_TRUE(backend->intersect(rays[i], hit)) << backend->name() << " ray " << i;
+      EXPECT_EQ(hit.prim_id, 3u) << backend->name() << " ray " << i;
+      EXPECT_TRUE(same_bits(hit.t, expected[i].t)) << backend->name() << " ray " << i << " t " << hit.t;
+      EXPECT_TRUE(same_bits(hit.u, expected[i].u) && same_bits(hit.v, expected[i].v))
+          << backend->name() << " ray " << i << " u " << hit.u << " v " << hit.v << " exact " << expected[i].u
+          << " " << expected[i].v;
+      EXPECT_EQ(hit.ng, triangle_geometric_normal(mesh.positions[9], mesh.positions[10], mesh.positions[11]))
+          << backend->name();
+    }
+    // The ties went through the exact path (both coplanar triangles, on every straight-down ray).
+    EXPECT_GE(refine_detail::exact_fallbacks.load() - fallbacks_before, rays.size() / 2) << backend->name();
   }
 }
 
