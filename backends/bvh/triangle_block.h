@@ -128,9 +128,10 @@ template <Report kReport>
   return triangle_block_detail::intersect<triangle_block_detail::Report::kHit>(ray, block, lanes, tmin, tmax, out);
 }
 
-// The same, writing only t (out.u, out.v are left as they were): for closest-hit traversals that ask for the
-// winner's u, v once at the end (triangle_block_hit_attributes below, or triangle_barycentrics), and any-hit
-// queries that want t (intersect_triangle_block_any is cheaper when only the answer matters).
+// The same, writing only t (out.u, out.v are left as they were): for queries that want t and the winner's u, v
+// at most once, at the end (triangle_block_hit_attributes below). The closest-hit traversals use
+// intersect_triangle_block_closest instead, which also hands over each hit's crossing for those u, v, and
+// intersect_triangle_block_any is cheaper when only the answer matters.
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_t(const TriangleRay& ray, const TriangleBlock& block,
                                                                   unsigned lanes, float tmin, float tmax, BlockHits& out) {
   return triangle_block_detail::intersect<triangle_block_detail::Report::kT>(ray, block, lanes, tmin, tmax, out);
