@@ -85,7 +85,8 @@ struct EdgeLanes {
   const __m128 any_negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
   const __m128 any_positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
   const unsigned mixed_signs = static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(any_negative, any_positive)));
-  return {lanes & ~exact_zero & ~mixed_signs, exact_zero};
+  unsigned candidates = lanes & ~exact_zero & ~mixed_signs;
+  return {candidates, exact_zero};
 }
 
 template <Report kReport>
