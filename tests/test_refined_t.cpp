@@ -125,12 +125,13 @@ TEST(RefinedT, IssueSponzaRayReplaysWithTheExactT) {
   }
 }
 
-// A closest-hit query certifies the winner's u, v from the crossing its t test computed (the kept crossing of
-// triangle_refine.h), so the attributes must be those of the final winner, not of a candidate it superseded or
-// of a tied loser found after it: stacked planes hit far to near (the mesh order brute follows), two coplanar
-// triangles of different shape at the nearest plane (equal t, so the lower prim id wins, with its own u, v),
-// and straight-down rays on which that t is a rounding tie (1 + 2^-24: the exact path decides t, and u, v
-// then come from the kept crossing). Every hit equals the exact backend's, bit for bit.
+// A closest-hit query of bvh or bvh8 certifies the winner's u, v from the crossing its t test computed (the
+// kept crossing of triangle_refine.h), so the attributes must be those of the final winner, not of a
+// candidate it superseded or of a tied loser found after it: stacked planes hit far to near (the mesh order
+// brute follows), two coplanar triangles of different shape at the nearest plane (equal t, so the lower prim
+// id wins, with its own u, v), and straight-down rays on which that t is a rounding tie (1 + 2^-24: the exact
+// path decides t, and u, v then come from the kept crossing). Every hit equals the exact backend's, bit for
+// bit (brute's too, which computes its winner's crossing again).
 TEST(RefinedT, ClosestHitAttributesAreTheFinalWinners) {
   constexpr float kTieZ = -0x1p-24f;  // t = 1 + 2^-24 from z = 1 straight down
   SceneGeometry geometry;

@@ -41,8 +41,6 @@ class BruteBackend final : public Backend {
     // The winner's shape, for the attributes computed once at the end.
     const TriangleMesh* best_mesh = nullptr;
     const Sphere* best_sphere = nullptr;
-    // The best triangle's crossing as its t test computed it, for its u, v at the end.
-    refine_detail::Crossing best_crossing{}, crossing;
     // The end of the interval still searched: the closest hit's t so far (closed, so an equidistant hit still
     // reaches `precedes`). Kept in a local, and the mesh's arrays too: stores to `hit` could alias them, and
     // the loop would reload them for every triangle.
@@ -55,13 +53,12 @@ class BruteBackend final : public Backend {
         const glm::uvec3 tri = indices[i];
         float t;
         // t only: the winner's u, v are computed once, at the end.
-        if (!intersect_triangle_t(tri_ray, p[tri.x], p[tri.y], p[tri.z], ray.tmin, tmax, t, crossing)) continue;
+        if (!intersect_triangle_t(tri_ray, p[tri.x], p[tri.y], p[tri.z], ray.tmin, tmax, t)) continue;
         const auto prim_id = static_cast<std::uint32_t>(i);
         if (!precedes(t, mesh.geom_id, prim_id, hit)) continue;
         hit.t = tmax = t;
         hit.geom_id = mesh.geom_id;
         hit.prim_id = prim_id;
-        best_crossing = crossing;
         best_mesh = &mesh;
         best_sphere = nullptr;
       }
@@ -84,7 +81,7 @@ class BruteBackend final : public Backend {
     } else if (best_mesh != nullptr) {
       const glm::uvec3& tri = best_mesh->indices[hit.prim_id];
       const std::vector<glm::vec3>& p = best_mesh->positions;
-      triangle_hit_attributes(tri_ray, p[tri.x], p[tri.y], p[tri.z], hit.t, hit.u, hit.v, hit.ng, &best_crossing);
+      triangle_hit_attributes(tri_ray, p[tri.x], p[tri.y], p[tri.z], hit.t, hit.u, hit.v, hit.ng);
     }
     return hit.found();
   }

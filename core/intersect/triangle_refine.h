@@ -405,18 +405,6 @@ TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const 
                   [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>
-TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
-                                    float tmax, float& t, Crossing& kept) {
-  return refine_t(ray, p0, p1, p2, tmin, tmax, t, kept,
-                  [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
-}
-template <typename Vec3>
-TWINRAY_REFINE_INLINE void refine_uv_kept(const RefineRay& ray, const Crossing& kept, const Vec3& p0, const Vec3& p1,
-                                          const Vec3& p2, float t, float& u, float& v, glm::vec3* ng) {
-  refine_uv_kept(ray, kept, t, u, v, ng,
-                 [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
-}
-template <typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
                                               float tmin, float tmax) {
   return refine_in_interval(ray, p0, p1, p2, tmin, tmax,

@@ -92,16 +92,10 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   return refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax);
 }
 // The barycentrics and the geometric normal (triangle_geometric_normal's bits) at once, from one e1 x e2:
-// what a closest-hit traversal asks for its winner. From `kept`, the crossing intersect_triangle_t left with
-// that t, when given (the same numbers, not computed again).
+// what a closest-hit traversal asks for its winner.
 [[gnu::always_inline]] inline void triangle_hit_attributes(const TriangleRay& ray, const glm::vec3& p0,
                                                            const glm::vec3& p1, const glm::vec3& p2, float t,
-                                                           float& u, float& v, glm::vec3& ng,
-                                                           const refine_detail::Crossing* kept = nullptr) {
-  if (kept != nullptr) {
-    refine_detail::refine_uv_kept(ray.refine, *kept, p0, p1, p2, t, u, v, &ng);
-    return;
-  }
+                                                           float& u, float& v, glm::vec3& ng) {
   refine_detail::refine_uv(ray.refine, p0, p1, p2, t, u, v, &ng);
 }
 [[gnu::always_inline]] inline void triangle_barycentrics(const TriangleRay& ray, const glm::vec3& p0,
@@ -151,12 +145,10 @@ inline bool needs_double(float u, float v, float w) {
 // correctly rounded t need not be known when its interval lies inside [tmin, tmax]).
 enum class Report { kHit, kT, kAny };
 
-// The watertight edge test, then the refinement, reporting as above; with Report::kT, the refinement's
-// crossing is left in `*kept` when given (for triangle_hit_attributes).
+// The watertight edge test, then the refinement, reporting as above.
 template <Report kReport>
 inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2, float tmin,
-                      float tmax, float& t_out, float& u_out, float& v_out,
-                      refine_detail::Crossing* kept = nullptr) {
+                      float tmax, float& t_out, float& u_out, float& v_out) {
   using triangle_detail::rounded;
   // Vertices relative to the origin, permuted. value_ptr views a vertex as float[3] (GLM guarantees the
   // layout), so a component is one indexed load; glm's operator[] would be a switch per access.
@@ -200,8 +192,6 @@ inline bool intersect(const TriangleRay& ray, const glm::vec3& p0, const glm::ve
   // Otherwise the three are non-zero, not NaN and of one sign, so their sum (the determinant) is not 0.
   if constexpr (kReport == Report::kAny) {
     return refine_triangle_in_interval(ray, p0, p1, p2, tmin, tmax);
-  } else if (kReport == Report::kT && kept != nullptr) {
-    return refine_detail::refine_t(ray.refine, p0, p1, p2, tmin, tmax, t_out, *kept);
   } else {
     if (!refine_triangle_t(ray, p0, p1, p2, tmin, tmax, t_out)) return false;
     if constexpr (kReport == Report::kHit) triangle_barycentrics(ray, p0, p1, p2, t_out, u_out, v_out);
@@ -225,15 +215,6 @@ inline bool intersect_triangle_t(const TriangleRay& ray, const glm::vec3& p0, co
   float unused_u, unused_v;
   return triangle_detail::intersect<triangle_detail::Report::kT>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u,
                                                                  unused_v);
-}
-
-// The same, leaving the crossing its t came from in `kept`: a closest-hit loop keeps its winner's and hands it
-// to triangle_hit_attributes, which then need not compute it again.
-inline bool intersect_triangle_t(const TriangleRay& ray, const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
-                                 float tmin, float tmax, float& t_out, refine_detail::Crossing& kept) {
-  float unused_u, unused_v;
-  return triangle_detail::intersect<triangle_detail::Report::kT>(ray, p0, p1, p2, tmin, tmax, t_out, unused_u,
-                                                                 unused_v, &kept);
 }
 
 // Only whether the ray hits the triangle within [tmin, tmax] (any-hit queries).
