@@ -204,16 +204,6 @@ TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
   asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
 }
 
-// Asks for the node's cache lines ahead of its box test. A node is 224 bytes at a 32-byte boundary, so it
-// spans exactly four 64-byte lines whichever boundary it starts on.
-TWINRAY_KERNEL inline void prefetch_node(const WideNode& node) {
-  const char* p = reinterpret_cast<const char*>(&node);
-  __builtin_prefetch(p);
-  __builtin_prefetch(p + 64);
-  __builtin_prefetch(p + 128);
-  __builtin_prefetch(p + 192);
-}
-
 }  // namespace wide_detail
 
 template <bool kTriangles, bool kSpheres>
@@ -243,12 +233,6 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
     reread_vectors(box_ray);
     const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
-    if (leaves != 0) {
-      // The node visited after the leaves: its cache lines load while the leaf tests run.
-      const unsigned inner = mask & ~leaves;
-      if (inner != 0) prefetch_node(bvh.nodes[node.child[__builtin_ctz(inner)]]);
-      else if (size != 0) prefetch_node(bvh.nodes[stack[size - 1]]);
-    }
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
