@@ -194,12 +194,8 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
   return false;
 }
 
-}  // namespace wide_detail
-
-namespace wide_detail {
-
 // Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
-// there at their next uses instead of keeping copies in registers. (The row offsets stay in registers.)
+// there at their next uses instead of keeping copies in registers.
 TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
   asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
 }
