@@ -78,13 +78,13 @@ struct EdgeLanes {
   const __m128 zero = _mm_setzero_ps();
   // The scalar test's detour (triangle_detail::needs_double): an edge function exactly 0, or NaN (products
   // that overflowed, far out in float's range).
-  const __m128 nan = _mm_or_ps(_mm_cmpunord_ps(u, v), _mm_cmpunord_ps(w, w));
-  const unsigned exact_zero = static_cast<unsigned>(_mm_movemask_ps(
-                                  _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)),
-                                            _mm_or_ps(_mm_cmpeq_ps(w, zero), nan)))) & lanes;
-  const __m128 any_negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
-  const __m128 any_positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
-  const unsigned mixed_signs = static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(any_negative, any_positive)));
+  const __m128 ordered = _mm_and_ps(_mm_cmpord_ps(u, v), _mm_cmpord_ps(w, w));
+  const __m128 non_zero =
+      _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(u, zero), _mm_cmpneq_ps(v, zero)), _mm_cmpneq_ps(w, zero));
+  const unsigned exact_zero = ~static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(ordered, non_zero))) & lanes;
+  // Among the others (none 0 or NaN) the signs are mixed exactly when the sign bits differ.
+  const unsigned mixed_signs =
+      static_cast<unsigned>(_mm_movemask_ps(_mm_or_ps(_mm_xor_ps(u, v), _mm_xor_ps(u, w))));
   unsigned candidates = lanes & ~exact_zero & ~mixed_signs;
   return {candidates, exact_zero};
 }

@@ -9,7 +9,7 @@
 
 // The ray as the slab test needs it; see wide_kernels_sse2.cpp.
 struct WideBoxRay {
-  __m256 org[3], inv[3];
+  __m256 org[3], inv[3], inv_far[3];
   std::size_t near_row[3], far_row[3];
 
   TWINRAY_KERNEL explicit WideBoxRay(const Ray& ray) {
@@ -17,6 +17,7 @@ struct WideBoxRay {
       const float inv_dir = 1.0f / ray.dir[a];
       org[a] = _mm256_set1_ps(ray.org[a]);
       inv[a] = _mm256_set1_ps(inv_dir);
+      inv_far[a] = _mm256_set1_ps(inv_dir * kSlabFarScale);
       const bool negative = std::signbit(inv_dir);
       near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
       far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
@@ -24,16 +25,15 @@ struct WideBoxRay {
   }
 };
 
-// Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling).
+// Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling and why the far
+// distances use the reciprocal pre-scaled by kSlabFarScale).
 TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
                                           float* entry) {
   const float* rows = &node.lo[0][0];
   __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
-  const __m256 scale = _mm256_set1_ps(kSlabFarScale);
   for (int a = 0; a < 3; ++a) {
     const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.near_row[a]), r.org[a]), r.inv[a]);
-    const __m256 t_far =
-        _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.far_row[a]), r.org[a]), r.inv[a]), scale);
+    const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.far_row[a]), r.org[a]), r.inv_far[a]);
     t0 = _mm256_max_ps(t_near, t0);
     t1 = _mm256_min_ps(t_far, t1);
   }

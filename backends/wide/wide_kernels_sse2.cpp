@@ -25,6 +25,7 @@ namespace twinray::wide_sse2 {
 // included) as in ray_box.h.
 struct WideBoxRay {
   __m128 org[3], inv[3];
+  __m128 inv_far[3];  // inv scaled by kSlabFarScale, for the far planes (see below)
   std::size_t near_row[3], far_row[3];
 
   explicit WideBoxRay(const Ray& ray) {
@@ -32,6 +33,7 @@ struct WideBoxRay {
       const float inv_dir = 1.0f / ray.dir[a];
       org[a] = _mm_set1_ps(ray.org[a]);
       inv[a] = _mm_set1_ps(inv_dir);
+      inv_far[a] = _mm_set1_ps(inv_dir * kSlabFarScale);
       const bool negative = std::signbit(inv_dir);
       near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
       far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
@@ -42,14 +44,18 @@ struct WideBoxRay {
 // Ize's robust slab test (ray_box.h) on four boxes: columns [col, col + 4) of the node's rows. The near and
 // far values of each axis are folded into [tmin, tmax] one axis at a time with the NaN-free bound as the
 // second operand of max / min, so a 0 * inf NaN drops out exactly as in the binary test.
+//
+// The far distance is (plane - org) * (inv * kSlabFarScale) with the scaled reciprocal rounded once per ray,
+// not ((plane - org) * inv) * kSlabFarScale as in ray_box.h: both are the exact distance times the scale
+// times four rounding factors (1 + d_i), |d_i| <= 2^-24 (the difference, the reciprocal, the product and
+// the product with the scale, in either order), which is all Ize's bound counts, so the scale covers the
+// same error; an infinite reciprocal stays infinite. One product less per axis and node visit.
 inline unsigned test_four(const float* rows, const WideBoxRay& r, std::size_t col, __m128 tmin, __m128 tmax,
                           float* entry) {
   __m128 t0 = tmin, t1 = tmax;
-  const __m128 scale = _mm_set1_ps(kSlabFarScale);
   for (int a = 0; a < 3; ++a) {
     const __m128 t_near = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.near_row[a] + col), r.org[a]), r.inv[a]);
-    const __m128 t_far =
-        _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.far_row[a] + col), r.org[a]), r.inv[a]), scale);
+    const __m128 t_far = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.far_row[a] + col), r.org[a]), r.inv_far[a]);
     t0 = _mm_max_ps(t_near, t0);
     t1 = _mm_min_ps(t_far, t1);
   }

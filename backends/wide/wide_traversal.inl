@@ -199,12 +199,18 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
   return false;
 }
 
+// Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
+// there at their next uses instead of keeping copies in registers.
+TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
+  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
+}
+
 }  // namespace wide_detail
 
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
   using namespace wide_detail;
-  const WideBoxRay box_ray(ray);
+  WideBoxRay box_ray(ray);
   const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
 
@@ -221,6 +227,11 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
   for (;;) {
     const WideNode& node = bvh.nodes[index];
     if (stats) boxes_tested += filled_slots(node);
+    // The box test reads the ray's broadcast vectors as memory operands (the load is part of the
+    // arithmetic instruction): kept in registers instead, they are live across the leaf test's call,
+    // which clobbers every vector register, and GCC spills and reloads all of them at each node with a
+    // hit leaf (docs/bvh-backend.md, "Any-hit, sixth round").
+    reread_vectors(box_ray);
     const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
