@@ -160,8 +160,10 @@ TEST(BvhInvariants, TreesAreWellFormed) {
 
 TEST(BvhInvariants, SerialAndParallelBuildsAreIdentical) {
   // 20000: parallel recursion only; 70000: the top nodes also bin (merging per-chunk bin grids) and
-  // partition in parallel chunks, which a serial build does in one pass. The triangles are sorted along x
-  // so that each chunk fills different bins and the merge has to combine them.
+  // partition in parallel chunks, each chunk's sides placed by its own bin counts (a serial build runs the
+  // same chunks one after the other). The triangles are sorted along x so that each chunk fills different
+  // bins and the merge has to combine them. Both the bvh's options and bvh8's binary tree's, nodes and
+  // primitive order.
   for (const int triangles : {20000, 70000}) {
     SceneGeometry soup = random_triangle_soup(triangles, 5);
     TriangleMesh& mesh = soup.meshes.front();
@@ -174,6 +176,17 @@ TEST(BvhInvariants, SerialAndParallelBuildsAreIdentical) {
     b.build(soup);
     ASSERT_EQ(a.nodes().size(), b.nodes().size()) << triangles;
     EXPECT_EQ(0, std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size_bytes())) << triangles;
+
+    const std::vector<Bounds3> bounds = primitive_bounds(soup);
+    for (BvhBuildOptions options : {BvhBuildOptions{}, WideBuildOptions::default_binary()}) {
+      const BvhTree parallel = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), options);
+      options.parallel = false;
+      const BvhTree one_pass = build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), options);
+      ASSERT_EQ(parallel.nodes.size(), one_pass.nodes.size()) << triangles;
+      EXPECT_EQ(0, std::memcmp(parallel.nodes.data(), one_pass.nodes.data(), parallel.nodes.size() * sizeof(BvhNode)))
+          << triangles;
+      EXPECT_EQ(parallel.prim_order, one_pass.prim_order) << triangles;
+    }
   }
 }
 

@@ -162,6 +162,26 @@ struct BinGrid {
   }
 };
 
+// How many primitives of one chunk's grid lie below each plane, on each axis: what a stable partition of
+// a large range in chunks needs to know where each chunk's two sides go, read off the binning's counts
+// instead of classifying the chunk's primitives once more.
+struct ChunkCounts {
+  std::uint32_t below_plane[3][kMaxBins + 1];  // [axis][k]: primitives in bins [0, k)
+
+  static ChunkCounts of(const BinGrid& g, int bins) {
+    ChunkCounts c;
+    for (int a = 0; a < 3; ++a) {
+      c.below_plane[a][0] = 0;
+      for (int k = 0; k < bins; ++k)  // a bin not marked used holds nothing (and its count is not set)
+        c.below_plane[a][k + 1] = c.below_plane[a][k] + ((g.used[a] >> k & 1u) != 0 ? g.count[a][k] : 0u);
+    }
+    return c;
+  }
+  std::size_t below(int axis, int plane) const {
+    return below_plane[static_cast<std::size_t>(axis)][static_cast<std::size_t>(plane)];
+  }
+};
+
 // How a range of primitives maps to bins: a centroid coordinate c falls in bin (c - lo) * scale truncated,
 // clamped to [0, bins - 1] (c == hi maps to `bins`, and rounding may overshoot). The clamp comes before the
 // truncation, which gives the same index as after it for every finite value (a NaN, from an unusable axis,

@@ -120,10 +120,12 @@ class Builder {
     PrimRef* const refs = in_scratch ? scratch_ : home_;
     const Bounds3 box = info.box(), centroids = info.centroids();
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
-    const Split split = choose_split(refs, begin, end, box, centroids, depth, mixed, info.second_kind);
+    std::vector<ChunkCounts> chunk_counts;  // per chunk of the binning: the partition needs no counting pass
+    const Split split = choose_split(refs, begin, end, box, centroids, depth, mixed, info.second_kind, &chunk_counts);
     RangeInfo left_info, right_info;
     bool children_in_scratch = in_scratch;
-    const std::size_t mid = partition(refs, begin, end, centroids, split, left_info, right_info, children_in_scratch);
+    const std::size_t mid =
+        partition(refs, begin, end, centroids, split, left_info, right_info, children_in_scratch, chunk_counts);
     const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
     nodes_[at] = BvhNode{box.lo, static_cast<std::uint32_t>(right_at), box.hi, 0};
     std::size_t count = 1;
@@ -163,7 +165,7 @@ class Builder {
     }
     RangeInfo left_info, right_info;
     bool in_scratch = false;  // small ranges stay in place
-    const std::size_t mid = partition(home_, begin, end, centroids, split, left_info, right_info, in_scratch);
+    const std::size_t mid = partition(home_, begin, end, centroids, split, left_info, right_info, in_scratch, {});
 
     if (o_.parallel && n >= kParallelGrain) {
       const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
@@ -205,8 +207,11 @@ class Builder {
     else for (std::size_t c = 0; c < chunks; ++c) run(c);
   }
 
+  // `chunk_counts`, if given, receives the bin counts of every chunk of a large range that is split by
+  // bins (see best_binned_split).
   Split choose_split(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
-                     std::size_t depth, bool mixed, std::uint32_t second_kind) const {
+                     std::size_t depth, bool mixed, std::uint32_t second_kind,
+                     std::vector<ChunkCounts>* chunk_counts = nullptr) const {
     const std::size_t n = end - begin;
     const bool fits_leaf = n <= static_cast<std::size_t>(o_.max_leaf_size);
     if (n == 1 || (fits_leaf && !mixed && (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth)))
@@ -231,7 +236,7 @@ class Builder {
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     }
 
-    Split best = best_binned_split(refs, begin, end, centroids, second_kind);
+    Split best = best_binned_split(refs, begin, end, centroids, second_kind, chunk_counts);
     if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     // Compare with stopping here: both costs per unit of this node's area.
@@ -272,22 +277,31 @@ class Builder {
 
   // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
   // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
-  // as in leaf_tests.
+  // as in leaf_tests. A large range (kParallelRangeGrain or more) is binned in fixed chunks of kRangeChunk,
+  // one grid each, merged in chunk order; each chunk's counts go to `chunk_counts` when it is given.
   Split best_binned_split(const PrimRef* range_refs, std::size_t begin, std::size_t end, const Bounds3& centroids,
-                          std::uint32_t second_kind) const {
+                          std::uint32_t second_kind, std::vector<ChunkCounts>* chunk_counts) const {
     std::array<bool, 3> usable{};
     const BinMapping map = bin_mapping(centroids, usable);
     const int bins = o_.bins;
     const std::span<const PrimRef> refs(range_refs, end);
     BinGrid grid;
-    if (!o_.parallel || end - begin < kParallelRangeGrain) {
+    if (end - begin < kParallelRangeGrain) {
       bin_range(grid, refs, begin, end, map, second_kind_begin_, second_kind != 0, avx2_);
     } else {
-      grid = reduce_chunks<BinGrid>(begin, end, [&](std::size_t b, std::size_t e) {
-        BinGrid g;
-        bin_range(g, refs, b, e, map, second_kind_begin_, second_kind != 0, avx2_);
-        return g;
-      }, [](BinGrid& acc, const BinGrid& part) { acc.merge(part); });
+      // In chunks serially too: a merged grid differs from one binned in a single pass at most in the sign
+      // of a zero coordinate of a bin's box, which changes no area, so the tree is the same either way.
+      const std::size_t chunks = (end - begin + kRangeChunk - 1) / kRangeChunk;
+      std::vector<BinGrid> parts(chunks);
+      for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
+        bin_range(parts[(b - begin) / kRangeChunk], refs, b, e, map, second_kind_begin_, second_kind != 0, avx2_);
+      });
+      grid = parts[0];
+      for (std::size_t c = 1; c < chunks; ++c) grid.merge(parts[c]);
+      if (chunk_counts != nullptr) {
+        chunk_counts->resize(chunks);
+        for (std::size_t c = 0; c < chunks; ++c) (*chunk_counts)[c] = ChunkCounts::of(parts[c], bins);
+      }
     }
 
     if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable);
@@ -332,10 +346,11 @@ class Builder {
   }
 
   // Splits refs[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
-  // chunks (count, then scatter into the other array: `in_scratch` flips), small ones in place; the
-  // choice depends on the size only, so serial and parallel builds stay identical.
+  // chunks (scattered into the other array: `in_scratch` flips; where each chunk's sides go follows from
+  // the binning's `chunk_counts`), small ones in place; the choice depends on the size only, so serial and
+  // parallel builds stay identical.
   std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split,
-                        RangeInfo& left, RangeInfo& right, bool& in_scratch) const {
+                        RangeInfo& left, RangeInfo& right, bool& in_scratch, std::span<const ChunkCounts> chunk_counts) const {
     PrimRef* first = refs + begin;
     PrimRef* last = refs + end;
     std::size_t mid = end;
@@ -354,7 +369,7 @@ class Builder {
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
-          return partition_in_chunks(refs, to, begin, end, goes_left, left, right);
+          return partition_in_chunks(refs, to, begin, end, goes_left, chunk_counts, split, left, right);
         }
         return partition_in_place(refs, begin, end, goes_left, left, right);
       }
@@ -401,49 +416,52 @@ class Builder {
     return static_cast<std::size_t>(lo - refs);
   }
 
-  // Stable partition of from[begin, end) into to[begin, end), in fixed chunks: count each chunk's sides,
-  // then scatter each chunk to where its sides start.
+  // Stable partition of from[begin, end) into to[begin, end), in fixed chunks: each chunk's left count is
+  // the sum of its bins below the plane (the binning's own counts, so no counting pass reads the range
+  // again), each chunk scatters to where its sides start and describes them on the way; the descriptions
+  // are merged in chunk order.
   template <class Pred>
   std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const Pred& goes_left,
-                                  RangeInfo& left, RangeInfo& right) const {
+                                  std::span<const ChunkCounts> chunk_counts, const Split& split, RangeInfo& left,
+                                  RangeInfo& right) const {
     const std::size_t n = end - begin;
     const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
-    struct Part {
-      std::size_t lefts = 0;
+    if (chunk_counts.size() != chunks) throw std::logic_error("bvh: a large range was partitioned without its bin counts");
+    std::vector<std::size_t> left_at(chunks), right_at(chunks);
+    std::size_t lefts = 0;
+    for (std::size_t c = 0; c < chunks; ++c) lefts += chunk_counts[c].below(split.axis, split.bin);
+    std::size_t l = begin, r = begin + lefts;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const std::size_t chunk_lefts = chunk_counts[c].below(split.axis, split.bin);
+      left_at[c] = l;
+      right_at[c] = r;
+      l += chunk_lefts;
+      r += std::min(kRangeChunk, n - c * kRangeChunk) - chunk_lefts;
+    }
+    struct Sides {
       RangeInfo left, right;
     };
-    std::vector<Part> parts(chunks);
+    std::vector<Sides> sides(chunks);
     const auto chunk_of = [&](std::size_t b) { return (b - begin) / kRangeChunk; };
     for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
-      Part& p = parts[chunk_of(b)];
+      Sides& part = sides[chunk_of(b)];
+      std::size_t li = left_at[chunk_of(b)], ri = right_at[chunk_of(b)];
       for (std::size_t i = b; i < e; ++i) {
         if (goes_left(from[i])) {
-          ++p.lefts;
-          p.left.add(from[i], second_kind_begin_);
+          part.left.add(from[i], second_kind_begin_);
+          to[li++] = from[i];
         } else {
-          p.right.add(from[i], second_kind_begin_);
+          part.right.add(from[i], second_kind_begin_);
+          to[ri++] = from[i];
         }
       }
     });
-
-    std::vector<std::size_t> left_at(chunks), right_at(chunks);
-    std::size_t lefts = 0;
-    for (std::size_t c = 0; c < chunks; ++c) lefts += parts[c].lefts;
-    std::size_t l = begin, r = begin + lefts;
     left = RangeInfo{};
     right = RangeInfo{};
-    for (std::size_t c = 0; c < chunks; ++c) {
-      left_at[c] = l;
-      right_at[c] = r;
-      l += parts[c].lefts;
-      r += std::min(kRangeChunk, n - c * kRangeChunk) - parts[c].lefts;
-      left.merge(parts[c].left);
-      right.merge(parts[c].right);
+    for (const Sides& part : sides) {
+      left.merge(part.left);
+      right.merge(part.right);
     }
-    for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
-      std::size_t li = left_at[chunk_of(b)], ri = right_at[chunk_of(b)];
-      for (std::size_t i = b; i < e; ++i) to[goes_left(from[i]) ? li++ : ri++] = from[i];
-    });
     return begin + lefts;
   }
 

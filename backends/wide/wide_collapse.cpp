@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
+#include <immintrin.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -192,20 +194,42 @@ class Collapser {
   // least l.cost[s] + r.cost[j - s] (float addition is monotonic), which was tried before and never loses
   // to it under the strict < below. Same minimum, same k, a quarter of the sums where the left child is a
   // leaf (flat from 1), as it is for most nodes near the bottom of the tree.
+  // The eight j are eight SSE lanes (two vectors, j = 1..4 and 5..8) and the loop runs over k: for each k
+  // the lanes add l.cost[k] to r.cost[j - k], read from a copy of r's row with +inf before it, so that a
+  // lane with k >= j (not a split into two non-empty parts) sums to +inf (or NaN) and never wins. A lane
+  // keeps its sum where it is strictly below the best so far, as the scalar loop over k does, so the
+  // minimum and the first k attaining it are the same, bit for bit (the same float additions and
+  // comparisons). Lane j = 1 ends at inf, k = 1 and is never read.
   static void split_of(const Plan& l, const Plan& r, std::array<float, kW + 1>& split,
                        std::array<std::uint8_t, kW + 1>& split_k) {
+    static_assert(kW == 8, "two SSE vectors of four lanes");
     const int k_max = l.flat_from != 0 && r.flat_from != 0 ? l.flat_from : kW - 1;
-    for (int j = 2; j <= kW; ++j) {
-      split[j] = kInf;
-      split_k[j] = 1;
-      const int last = std::min(j - 1, k_max);
-      for (int k = 1; k <= last; ++k) {
-        const float c = l.cost[k] + r.cost[j - k];
-        if (c < split[j]) {
-          split[j] = c;
-          split_k[j] = static_cast<std::uint8_t>(k);
-        }
-      }
+    alignas(16) float padded[2 * kW + 1];  // padded[kW + m] = r.cost[m] (m = 0..kW; cost[0] = inf), inf below
+    for (int m = 0; m < kW; ++m) padded[m] = kInf;
+    for (int m = 0; m <= kW; ++m) padded[kW + m] = r.cost[static_cast<std::size_t>(m)];
+    __m128 best_lo = _mm_set1_ps(kInf), best_hi = best_lo;
+    __m128i k_lo = _mm_set1_epi32(1), k_hi = k_lo;
+    for (int k = 1; k <= k_max; ++k) {
+      const __m128 lk = _mm_set1_ps(l.cost[static_cast<std::size_t>(k)]);
+      const __m128 c_lo = _mm_add_ps(lk, _mm_loadu_ps(padded + kW + 1 - k));  // j = 1..4: r.cost[j - k]
+      const __m128 c_hi = _mm_add_ps(lk, _mm_loadu_ps(padded + kW + 5 - k));  // j = 5..8
+      const __m128i less_lo = _mm_castps_si128(_mm_cmplt_ps(c_lo, best_lo));
+      const __m128i less_hi = _mm_castps_si128(_mm_cmplt_ps(c_hi, best_hi));
+      best_lo = _mm_min_ps(c_lo, best_lo);  // c < best ? c : best, the scalar update (NaN c keeps best)
+      best_hi = _mm_min_ps(c_hi, best_hi);
+      const __m128i kv = _mm_set1_epi32(k);
+      k_lo = _mm_or_si128(_mm_and_si128(less_lo, kv), _mm_andnot_si128(less_lo, k_lo));
+      k_hi = _mm_or_si128(_mm_and_si128(less_hi, kv), _mm_andnot_si128(less_hi, k_hi));
+    }
+    alignas(16) float cost[kW];
+    alignas(16) std::int32_t ks[kW];
+    _mm_store_ps(cost, best_lo);
+    _mm_store_ps(cost + 4, best_hi);
+    _mm_store_si128(reinterpret_cast<__m128i*>(ks), k_lo);
+    _mm_store_si128(reinterpret_cast<__m128i*>(ks + 4), k_hi);
+    for (int j = 1; j <= kW; ++j) {
+      split[static_cast<std::size_t>(j)] = cost[j - 1];
+      split_k[static_cast<std::size_t>(j)] = static_cast<std::uint8_t>(ks[j - 1]);
     }
   }
 
