@@ -106,7 +106,10 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"swapped-uv", "closest-cornell", Outcome::Fail, "wrong attributes: u", "any-hit-cornell"},
                       BugCase{"flipped-normal", "closest-soup", Outcome::Fail, "wrong attributes: ng", "any-hit-cornell"},
                       // t = +inf once agreed with every finite t (1e-4 * inf is inf).
-                      BugCase{"infinite-t", "closest-soup", Outcome::Fail, "at t inf", "any-hit-cornell"}),
+                      BugCase{"infinite-t", "closest-soup", Outcome::Fail, "at t inf", "any-hit-cornell"},
+                      // 32 entries that drop what does not fit: only a tree deeper than 32 along a ray, with
+                      // the closest hit among the last entries pushed (procedural:nest), loses anything.
+                      BugCase{"stack-32", "deep-tree-nest", Outcome::Fail, "answers wrong", "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)

@@ -40,4 +40,19 @@ SceneGeometry random_spheres(std::size_t n, std::uint64_t seed);
 // 3, centered at the origin, radius 0.5) as the last geometry.
 SceneGeometry mixed_spheres_and_triangles(std::size_t n_spheres, std::size_t n_triangles, std::uint64_t seed);
 
+// Nested levels around the origin, the scene that makes a SAH tree deep along one ray: level j (0 ..
+// levels - 1, at most kMaxNestLevels) holds triangles at distance about s_j = 2^(36 - 3j/2) from the origin,
+// in the cone of directions around the diagonal (1, 1, 1), and the same again mirrored in x (around
+// (-1, 1, 1)). Levels shrink geometrically toward the origin, so a SAH or midpoint builder peels
+// them off one by one: the box of the inner levels contains the origin and the outer level's box lies
+// farther out, so a ray from the origin enters the inner box first (at t = tmin) and the level's box later.
+// A traversal that visits the nearer child first therefore keeps one pending entry per level, and the
+// closest hit (the innermost level in the ray's direction) is among the last entries pushed. Level j holds
+// ceil(1.15^(levels - 1 - j)) triangles: the outer levels hold more primitives than all the levels inside
+// them together weigh in SAH cost, which is what keeps a SAH builder from grouping several levels per split
+// (with equal counts it groups about three). The scales stay within [2^-36, 2^36], where every product of
+// three coordinates a float triangle test forms (with a unit direction) is a normal float, with a margin. One mesh, geom_id 0.
+inline constexpr int kMaxNestLevels = 49;
+SceneGeometry nested_levels(int levels, std::uint64_t seed);
+
 }  // namespace twinray

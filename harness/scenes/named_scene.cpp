@@ -198,6 +198,13 @@ const std::vector<Generator>& generators() {
          a.expect_count(0, 0, "");
          return sphere_sizes();
        }},
+      {{"nest", "LEVELS:SEED",
+        "nested levels of triangles shrinking toward the origin (a deep tree along rays from the origin)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "LEVELS:SEED");
+         return nested_levels(static_cast<int>(a.integer(0, 1, kMaxNestLevels, "LEVELS")),
+                              static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
       {{"mixed", "NSPHERES:NTRIANGLES:SEED", "spheres and a triangle soup, ids interleaved, and a tessellated sphere"},
        [](const ProceduralArgs& a) {
          a.expect_count(3, 3, "NSPHERES:NTRIANGLES:SEED");
