@@ -131,6 +131,39 @@ SceneGeometry random_triangle_soup(std::size_t n, std::uint64_t seed) {
   return g;
 }
 
+SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t seed) {
+  // The triples of cube corners (bit a of a corner: + in axis a) that take both signs in every axis.
+  std::vector<std::array<int, 3>> triples;
+  for (int i = 0; i < 8; ++i)
+    for (int j = i + 1; j < 8; ++j)
+      for (int k = j + 1; k < 8; ++k)
+        if ((i & j & k) == 0 && (i | j | k) == 7) triples.push_back({i, j, k});
+  per_cluster = std::clamp(per_cluster, 1, static_cast<int>(triples.size()));
+  Rng rng(seed, 5);
+  TriangleMesh mesh;
+  mesh.geom_id = 0;
+  for (std::size_t c = 0; c < n; ++c) {
+    const auto grid = [&rng] { return static_cast<float>(static_cast<int>(rng.next_below(113)) - 56) * 0x1p-6f; };
+    const glm::vec3 centre(grid(), grid(), grid());
+    const float r = static_cast<float>(2 + rng.next_below(6)) * 0x1p-6f;
+    const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+    for (int corner = 0; corner < 8; ++corner)
+      mesh.positions.push_back(centre + r * glm::vec3((corner & 1) ? 1.0f : -1.0f, (corner & 2) ? 1.0f : -1.0f,
+                                                      (corner & 4) ? 1.0f : -1.0f));
+    // A different choice of triples per cluster: start at a random one and step by a prime.
+    const std::uint32_t start = rng.next_below(static_cast<std::uint32_t>(triples.size()));
+    for (int b = 0; b < per_cluster; ++b) {
+      const std::array<int, 3>& t = triples[(start + 7u * static_cast<std::uint32_t>(b)) % triples.size()];
+      mesh.indices.emplace_back(base + static_cast<std::uint32_t>(t[0]), base + static_cast<std::uint32_t>(t[1]),
+                                base + static_cast<std::uint32_t>(t[2]));
+    }
+  }
+  mesh.positions.reserve(mesh.positions.size() + 1);
+  SceneGeometry g;
+  g.meshes.push_back(std::move(mesh));
+  return g;
+}
+
 SceneGeometry nested_levels(int levels, std::uint64_t seed) {
   levels = std::clamp(levels, 1, kMaxNestLevels);
   // 2^(36 - 1.5 j) as 2^0 or 2^(1/2) = 2 * 2^(-1/2) times a power of two: exact steps, no rounding drift.

@@ -40,6 +40,14 @@ SceneGeometry random_spheres(std::size_t n, std::uint64_t seed);
 // 3, centered at the origin, radius 0.5) as the last geometry.
 SceneGeometry mixed_spheres_and_triangles(std::size_t n_spheres, std::size_t n_triangles, std::uint64_t seed);
 
+// n clusters of `per_cluster` (1..32) different triangles whose bounding boxes are all one cube: every
+// triangle's vertices are three corners of the cube [c - r, c + r]^3 that differ in every axis, so the box of
+// each (and its centre, the centroid a builder bins by) is exactly the cube and its centre c. No split by box
+// centres separates a cluster, so a builder keeps it in one leaf (or splits it by count): the scene that
+// shows a leaf's primitive count stored in too few bits. Centres lie on a grid of 2^-6 in [-1, 1]^3 and r
+// is a multiple of 2^-6, so c +- r is exact. One mesh, geom_id 0.
+SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t seed);
+
 // Nested levels around the origin, the scene that makes a SAH tree deep along one ray: level j (0 ..
 // levels - 1, at most kMaxNestLevels) holds triangles at distance about s_j = 2^(36 - 3j/2) from the origin,
 // in the cone of directions around the diagonal (1, 1, 1), and the same again mirrored in x (around

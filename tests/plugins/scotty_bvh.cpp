@@ -53,6 +53,14 @@
 //  32 ANYHIT_NO_SPHERES any-hit tests triangles only
 //  33 INDEX_20BIT       the primitive index packed into 20 bits of the leaf: triangle 2^20 + i is i
 //
+// The fourth red-team round's:
+//
+//  34 BACKFACE_CULL     triangles seen from the back are missed (Moller-Trumbore's culling branch, copied
+//                       for a renderer of closed, outward-facing meshes)
+//  35 LEAF_COUNT_3BIT   the leaf's primitive count kept in 3 bits ("leaves hold at most 4"), but the builder
+//                       keeps up to 16 primitives in a leaf that no split improves: 8 to 15 lose their last
+//                       eight, 16 test none
+//
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
 // TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
@@ -296,6 +304,9 @@ struct Primitive {
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return tr;
     const double det = u + v + w;
     if (det == 0.0) return tr;
+#if BUG(34)
+    if (det < 0.0) return tr;  // the back of the triangle: "culled"
+#endif
     const double t = static_cast<float>((u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det);
     if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
     tr.hit = true;
@@ -362,6 +373,15 @@ struct StackEntry {
   double entry;         // where the ray enters the node's box
   std::size_t hits_at;  // hits found when it was pushed (for bug 2)
 };
+
+// The primitives of a leaf, as the traversal reads them.
+std::size_t leaf_count(const Node& node) {
+#if BUG(35)
+  return node.size & 7u;  // three bits of a packed field
+#else
+  return node.size;
+#endif
+}
 
 constexpr std::size_t kMaxDepth = 96;
 constexpr std::size_t kBuckets = 12;
@@ -431,7 +451,7 @@ class BVH {
       const Node& node = nodes_[e.node];
       if (node.is_leaf()) {
         std::size_t i = node.start;
-        while (i < node.start + node.size - (BUG(29) ? 1 : 0)) {
+        while (i < node.start + leaf_count(node) - (BUG(29) ? 1 : 0)) {
           ++stats.primitives_tested;
           const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : bound);
           if (!t.hit) {
@@ -499,7 +519,7 @@ class BVH {
 #if BUG(21)
         return true;  // children are only pushed when their box is hit: "the leaf's box is hit, so it's occluded"
 #endif
-        for (std::size_t i = node.start; i < node.start + node.size - (BUG(29) ? 1 : 0); ++i) {
+        for (std::size_t i = node.start; i < node.start + leaf_count(node) - (BUG(29) ? 1 : 0); ++i) {
 #if BUG(32)
           if (primitives_[i].sphere != nullptr) continue;  // shadows come from meshes
 #endif
