@@ -362,6 +362,21 @@ TEST(GradePlugins, ThirdRoundBugsAreCaughtAndReproduced) {
   std::filesystem::remove_all(suite);
 }
 
+// Child node indices kept in 16 bits go wrong only past 65,536 nodes: a 327,680-triangle mesh's build check
+// catches it (the default suite's million-triangle build and dragon checks do too), and the correct BVH passes.
+TEST(GradePlugins, SixteenBitNodeIndexIsCaughtOnALargeMesh) {
+  const std::filesystem::path suite = scratch_suite("node-index", R"({"suite": "node-index",
+    "defaults": {"time_limit": 60, "memory_limit_mib": 2048, "seed": 3},
+    "scenes": {"large": "procedural:sphere-mesh:7"},
+    "checks": [{"name": "build-large", "category": "build", "scene": "large", "points": 1}]})");
+  const CheckResult bad = check_named(grade_with(scotty_plugin("node-index-16bit"), suite), "build-large");
+  EXPECT_NE(bad.outcome, Outcome::Pass) << terminal_check_line(bad);
+  EXPECT_EQ(bad.points, 0.0);
+  const CheckResult good = check_named(grade_with(scotty_plugin(), suite), "build-large");
+  EXPECT_EQ(good.outcome, Outcome::Pass) << terminal_check_line(good);
+  std::filesystem::remove_all(suite);
+}
+
 // A plugin that writes over the shared memory its worker answers through is stopped at the first answer the
 // worker cannot give, as a crash, rather than waited for until the check's time limit.
 TEST(GradePlugins, PluginWritingOverTheWorkersMemoryCrashesTheCheckAtOnce) {

@@ -60,6 +60,7 @@
 //  35 LEAF_COUNT_3BIT   the leaf's primitive count kept in 3 bits ("leaves hold at most 4"), but the builder
 //                       keeps up to 16 primitives in a leaf that no split improves: 8 to 15 lose their last
 //                       eight, 16 test none
+//  36 NODE_INDEX_16BIT  child node indices stored in 16 bits ("64k nodes is plenty"): node 65536 + i is i
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -644,8 +645,13 @@ class BVH {
     const std::size_t l = build_node(start, mid, depth + 1);
     const std::size_t r = build_node(mid, end, depth + 1);
 #endif
+#if BUG(36)
+    nodes_[index].l = static_cast<std::uint16_t>(l);
+    nodes_[index].r = static_cast<std::uint16_t>(r);
+#else
     nodes_[index].l = l;
     nodes_[index].r = r;
+#endif
     return index;
   }
 
