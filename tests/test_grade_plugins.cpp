@@ -110,6 +110,10 @@ INSTANTIATE_TEST_SUITE_P(
                       // 32 entries that drop what does not fit: only a tree deeper than 32 along a ray, with
                       // the closest hit among the last entries pushed (procedural:nest), loses anything.
                       BugCase{"stack-32", "deep-tree-nest", Outcome::Fail, "answers wrong", "closest-soup"},
+                      // The same stack in an any-hit traversal (nearer child first): only rays whose every hit is
+                      // among the last entries pushed show it (the nest's tunnel).
+                      BugCase{"anyhit-stack-32", "deep-tree-nest", Outcome::Fail, "plugin says not occluded",
+                              "closest-soup"},
                       BugCase{"backface-cull", "closest-soup", Outcome::Fail, "answers wrong", "spheres-sizes"},
                       // Leaves of 8 to 16 primitives occur where no split separates them: clusters of different
                       // triangles with one bounding box (procedural:coincident-boxes).

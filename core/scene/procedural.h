@@ -58,8 +58,12 @@ SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t see
 // closest hit (the innermost level in the ray's direction) is among the last entries pushed. Level j holds
 // ceil(1.15^(levels - 1 - j)) triangles: the outer levels hold more primitives than all the levels inside
 // them together weigh in SAH cost, which is what keeps a SAH builder from grouping several levels per split
-// (with equal counts it groups about three). The scales stay within [2^-36, 2^36], where every product of
-// three coordinates a float triangle test forms (with a unit direction) is a normal float, with a margin. One mesh, geom_id 0.
+// (with equal counts it groups about three). The outer levels' many triangles give every ray into a cone an
+// early hit, where an any-hit query stops; so each cone has a tunnel, directions within 0.1 radian of its
+// axis, that only the innermost three levels cross, each with one more (small) triangle across it: rays
+// along it hit nothing before the innermost levels. The scales stay within [2^-36, 2^36], where every
+// product of three coordinates a float triangle test forms (with a unit direction) is a normal float, with a
+// margin. One mesh, geom_id 0.
 inline constexpr int kMaxNestLevels = 49;
 SceneGeometry nested_levels(int levels, std::uint64_t seed);
 

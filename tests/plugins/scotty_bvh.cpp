@@ -61,6 +61,8 @@
 //                       keeps up to 16 primitives in a leaf that no split improves: 8 to 15 lose their last
 //                       eight, 16 test none
 //  36 NODE_INDEX_16BIT  child node indices stored in 16 bits ("64k nodes is plenty"): node 65536 + i is i
+//  37 ANYHIT_STACK_32   any-hit reuses the closest-hit traversal (nearer child first) with bug 20's stack of
+//                       32 entries that drops what does not fit, and stops at the first hit
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -508,6 +510,9 @@ class BVH {
 #else
     const double tmax = ray.tmax;
 #endif
+#if BUG(37)
+    return any_hit_nearer_first(ray, tmax, stats);
+#endif
     std::array<std::size_t, kMaxDepth + 1> stack;
     std::size_t sp = 0;
     stack[sp++] = 0;
@@ -537,6 +542,45 @@ class BVH {
     }
     return false;
   }
+
+#if BUG(37)
+  // The closest-hit traversal, nearer child first, ending at the first hit: "any-hit is closest-hit that
+  // stops early", with the same fixed stack.
+  bool any_hit_nearer_first(const Ray& ray, double tmax, twinray_query_stats& stats) const {
+    std::array<std::size_t, 32> stack;  // "32 levels is more than any tree needs"
+    std::size_t sp = 0;
+    ++stats.nodes_visited;
+    double root_times[2] = {lowest_t(ray), tmax};
+    if (!nodes_[0].bbox.hit(ray, root_times)) return false;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const Node& node = nodes_[stack[--sp]];
+      if (node.is_leaf()) {
+        for (std::size_t i = node.start; i < node.start + node.size; ++i) {
+          ++stats.primitives_tested;
+          if (primitives_[i].hit(ray, tmax).hit) return true;
+        }
+        continue;
+      }
+      double tl[2] = {lowest_t(ray), tmax}, tr[2] = {lowest_t(ray), tmax};
+      stats.nodes_visited += 2;
+      const bool hl = nodes_[node.l].bbox.hit(ray, tl), hr = nodes_[node.r].bbox.hit(ray, tr);
+      const auto push = [&](std::size_t n) {
+        if (sp < stack.size()) stack[sp++] = n;  // full: dropped
+      };
+      const bool left_near = tl[0] <= tr[0];
+      if (hl && hr) {
+        push(left_near ? node.r : node.l);
+        push(left_near ? node.l : node.r);
+      } else if (hl) {
+        push(node.l);
+      } else if (hr) {
+        push(node.r);
+      }
+    }
+    return false;
+  }
+#endif
 
   // The unit-cost SAH of docs/plugin-abi.md: area-weighted interior nodes plus area-weighted leaf sizes.
   void stats(twinray_build_stats& s) const {
