@@ -106,7 +106,18 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"swapped-uv", "closest-cornell", Outcome::Fail, "wrong attributes: u", "any-hit-cornell"},
                       BugCase{"flipped-normal", "closest-soup", Outcome::Fail, "wrong attributes: ng", "any-hit-cornell"},
                       // t = +inf once agreed with every finite t (1e-4 * inf is inf).
-                      BugCase{"infinite-t", "closest-soup", Outcome::Fail, "at t inf", "any-hit-cornell"}),
+                      BugCase{"infinite-t", "closest-soup", Outcome::Fail, "at t inf", "any-hit-cornell"},
+                      // 32 entries that drop what does not fit: only a tree deeper than 32 along a ray, with
+                      // the closest hit among the last entries pushed (procedural:nest), loses anything.
+                      BugCase{"stack-32", "deep-tree-nest", Outcome::Fail, "answers wrong", "closest-soup"},
+                      // The same stack in an any-hit traversal (nearer child first): only rays whose every hit is
+                      // among the last entries pushed show it (the nest's tunnel).
+                      BugCase{"anyhit-stack-32", "deep-tree-nest", Outcome::Fail, "plugin says not occluded",
+                              "closest-soup"},
+                      BugCase{"backface-cull", "closest-soup", Outcome::Fail, "answers wrong", "spheres-sizes"},
+                      // Leaves of 8 to 16 primitives occur where no split separates them: clusters of different
+                      // triangles with one bounding box (procedural:coincident-boxes).
+                      BugCase{"leaf-count-3bit", "closest-coincident", Outcome::Fail, "answers wrong", "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -352,6 +363,21 @@ TEST(GradePlugins, ThirdRoundBugsAreCaughtAndReproduced) {
   EXPECT_NE(c.detail.find("depend on the rays asked before"), std::string::npos) << c.detail;
   EXPECT_NE(c.reproduce.find("--check closest-cornell"), std::string::npos) << c.reproduce;
   EXPECT_EQ(c.figures.value("replays_alone", true), false) << c.figures.dump();
+  std::filesystem::remove_all(suite);
+}
+
+// Child node indices kept in 16 bits go wrong only past 65,536 nodes: a 327,680-triangle mesh's build check
+// catches it (the default suite's million-triangle build and dragon checks do too), and the correct BVH passes.
+TEST(GradePlugins, SixteenBitNodeIndexIsCaughtOnALargeMesh) {
+  const std::filesystem::path suite = scratch_suite("node-index", R"({"suite": "node-index",
+    "defaults": {"time_limit": 60, "memory_limit_mib": 2048, "seed": 3},
+    "scenes": {"large": "procedural:sphere-mesh:7"},
+    "checks": [{"name": "build-large", "category": "build", "scene": "large", "points": 1}]})");
+  const CheckResult bad = check_named(grade_with(scotty_plugin("node-index-16bit"), suite), "build-large");
+  EXPECT_NE(bad.outcome, Outcome::Pass) << terminal_check_line(bad);
+  EXPECT_EQ(bad.points, 0.0);
+  const CheckResult good = check_named(grade_with(scotty_plugin(), suite), "build-large");
+  EXPECT_EQ(good.outcome, Outcome::Pass) << terminal_check_line(good);
   std::filesystem::remove_all(suite);
 }
 

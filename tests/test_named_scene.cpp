@@ -5,6 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace twinray {
@@ -38,10 +42,34 @@ TEST(NamedScene, ProceduralScenesAreDeterministic) {
   EXPECT_NEAR(far.geometry.bounds().center().x, 100.0f, 1e-3f);
 }
 
+// The deep-tree scene: level j of L holds ceil(1.15^(L - 1 - j)) triangles in each of its two cones (and the
+// innermost three one more, across the tunnel), at
+// distance about 2^(36 - 1.5 j) from the origin, the innermost (j = 48) at about 2^-36.
+TEST(NamedScene, NestHasItsLevelsAtTheDocumentedScales) {
+  const Scene nest = load_named_scene("procedural:nest:49:1");
+  std::size_t expected = 0;
+  double count = 1.0;
+  for (int j = 0; j < 49; ++j, count *= 1.15) expected += static_cast<std::size_t>(std::ceil(count));
+  // Two cones, and in each the innermost three levels also hold a triangle across the tunnel.
+  EXPECT_EQ(nest.geometry.triangle_count(), 2 * (expected + 3));
+  float nearest = INFINITY, farthest = 0.0f;
+  for (const glm::vec3& p : nest.geometry.meshes[0].positions) {
+    nearest = std::min(nearest, glm::length(p));
+    farthest = std::max(farthest, glm::length(p));
+  }
+  // Distances are scale * (0.7..1) * (0.9..1.1) * |(0.6..1.4)^3|: within [0.37, 2.7] of the level's scale.
+  EXPECT_GE(nearest, 0.37f * std::ldexp(1.0f, -36));
+  EXPECT_LE(nearest, 2.7f * std::ldexp(1.0f, -36));
+  EXPECT_GE(farthest, 0.37f * std::ldexp(1.0f, 36));
+  EXPECT_LE(farthest, 2.7f * std::ldexp(1.0f, 36));
+  EXPECT_EQ(load_named_scene("procedural:nest:1:1").geometry.triangle_count(), 4u);
+}
+
 TEST(NamedScene, BadNamesAreInputErrorsNamingTheScene) {
   for (const char* bad : {"procedural:nothing", "procedural:soup:10", "procedural:soup:-3:1", "procedural:grid:2:x",
                           "procedural:sphere-mesh:12", "procedural:box:3:1", "procedural:empty:1",
-                          "procedural:sphere-mesh:1:0:0:0:-1", "no/such/scene.json"}) {
+                          "procedural:sphere-mesh:1:0:0:0:-1", "procedural:nest:50:1", "procedural:nest:0:1",
+                          "no/such/scene.json"}) {
     try {
       load_named_scene(bad);
       ADD_FAILURE() << bad << " loaded";

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 #include <utility>
+#include <vector>
 
 namespace twinray {
 
@@ -127,6 +128,115 @@ SceneGeometry random_triangle_soup(std::size_t n, std::uint64_t seed) {
   Rng rng(seed, 1);
   SceneGeometry g;
   g.meshes.push_back(make_triangle_soup(n, rng, 0));
+  return g;
+}
+
+SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t seed) {
+  // The triples of cube corners (bit a of a corner: + in axis a) that take both signs in every axis.
+  std::vector<std::array<int, 3>> triples;
+  for (int i = 0; i < 8; ++i)
+    for (int j = i + 1; j < 8; ++j)
+      for (int k = j + 1; k < 8; ++k)
+        if ((i & j & k) == 0 && (i | j | k) == 7) triples.push_back({i, j, k});
+  per_cluster = std::clamp(per_cluster, 1, static_cast<int>(triples.size()));
+  Rng rng(seed, 5);
+  TriangleMesh mesh;
+  mesh.geom_id = 0;
+  for (std::size_t c = 0; c < n; ++c) {
+    const auto grid = [&rng] { return static_cast<float>(static_cast<int>(rng.next_below(113)) - 56) * 0x1p-6f; };
+    const glm::vec3 centre(grid(), grid(), grid());
+    const float r = static_cast<float>(2 + rng.next_below(6)) * 0x1p-6f;
+    const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+    for (int corner = 0; corner < 8; ++corner)
+      mesh.positions.push_back(centre + r * glm::vec3((corner & 1) ? 1.0f : -1.0f, (corner & 2) ? 1.0f : -1.0f,
+                                                      (corner & 4) ? 1.0f : -1.0f));
+    // A different choice of triples per cluster: start at a random one and step by a prime.
+    const std::uint32_t start = rng.next_below(static_cast<std::uint32_t>(triples.size()));
+    for (int b = 0; b < per_cluster; ++b) {
+      const std::array<int, 3>& t = triples[(start + 7u * static_cast<std::uint32_t>(b)) % triples.size()];
+      mesh.indices.emplace_back(base + static_cast<std::uint32_t>(t[0]), base + static_cast<std::uint32_t>(t[1]),
+                                base + static_cast<std::uint32_t>(t[2]));
+    }
+  }
+  mesh.positions.reserve(mesh.positions.size() + 1);
+  SceneGeometry g;
+  g.meshes.push_back(std::move(mesh));
+  return g;
+}
+
+SceneGeometry nested_levels(int levels, std::uint64_t seed) {
+  levels = std::clamp(levels, 1, kMaxNestLevels);
+  constexpr float kTunnelRadians = 0.1f;
+  constexpr int kBlocked = 3;
+  // 2^(36 - 1.5 j) as 2^0 or 2^(1/2) = 2 * 2^(-1/2) times a power of two: exact steps, no rounding drift.
+  constexpr std::array<float, 2> kHalves = {1.0f, 0.70710677f};
+  std::vector<std::size_t> counts(static_cast<std::size_t>(levels));
+  double count = 1.0;
+  for (std::size_t j = counts.size(); j-- > 0;) {
+    counts[j] = static_cast<std::size_t>(std::ceil(count));
+    count *= 1.15;
+  }
+  Rng rng(seed, 4);
+  TriangleMesh mesh;
+  mesh.geom_id = 0;
+  // Two cones, around (1, 1, 1) and around (-1, 1, 1). Not the opposite of the first: on a line through the
+  // origin a binned builder's split near 0 takes inner levels of one cone with the other, and the chain
+  // is lost (measured: 22 pending entries at most instead of 49).
+  const auto add = [&mesh](const std::array<glm::vec3, 3>& v) {
+    const auto base = static_cast<std::uint32_t>(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), v.begin(), v.end());
+    mesh.indices.emplace_back(base, base + 1, base + 2);
+  };
+  for (const float sign : {1.0f, -1.0f}) {
+    // The tunnel: a cone of directions around the cone's axis that no level but the innermost kBlocked
+    // crosses; those hold a small triangle across it. A ray along it passes every outer level's box without
+    // a hit, so its only hits are among the last entries pushed, for any-hit queries too (elsewhere the many
+    // triangles of the outer levels give every ray an early hit).
+    const glm::vec3 axis = glm::normalize(glm::vec3(sign, 1.0f, 1.0f));
+    const float tunnel_cos = std::cos(kTunnelRadians);
+    const auto crosses_tunnel = [&](const std::array<glm::vec3, 3>& v) {
+      constexpr int kSteps = 16;  // points of the triangle every 1/16 of its edges
+      for (int i = 0; i <= kSteps; ++i)
+        for (int k = 0; i + k <= kSteps; ++k) {
+          const float a = static_cast<float>(i) / kSteps, b = static_cast<float>(k) / kSteps;
+          const glm::vec3 p = (1.0f - a - b) * v[0] + a * v[1] + b * v[2];
+          if (glm::dot(glm::normalize(p), axis) > tunnel_cos) return true;
+        }
+      return false;
+    };
+    for (int j = 0; j < levels; ++j) {
+      const float scale = std::ldexp(kHalves[static_cast<std::size_t>(j % 2)], 36 - 3 * (j / 2) - j % 2);
+      const bool blocked = j >= levels - kBlocked;
+      for (std::size_t k = 0; k < counts[static_cast<std::size_t>(j)]; ++k) {
+        std::array<glm::vec3, 3> v, unit;
+        do {
+          const float distance = scale * (0.7f + 0.3f * rng.next_float());
+          for (glm::vec3& p : v) {
+            const float along = distance * (0.9f + 0.2f * rng.next_float());
+            for (int a = 0; a < 3; ++a) p[a] = along * (0.6f + 0.8f * rng.next_float());
+            p.x *= sign;
+          }
+          for (int m = 0; m < 3; ++m) unit[static_cast<std::size_t>(m)] = v[static_cast<std::size_t>(m)] / scale;
+        } while (glm::length(glm::cross(unit[1] - unit[0], unit[2] - unit[0])) < 1e-3f ||
+                 (!blocked && crosses_tunnel(unit)));
+        add(v);
+      }
+      if (blocked) {
+        // Across the tunnel, centred on its axis, half its radius wide.
+        const glm::vec3 u = glm::normalize(glm::cross(axis, glm::vec3(0.0f, 0.0f, 1.0f))), w = glm::cross(axis, u);
+        const float distance = 0.85f * scale, radius = distance * std::tan(0.5f * kTunnelRadians);
+        std::array<glm::vec3, 3> v;
+        for (int m = 0; m < 3; ++m) {
+          const float angle = 2.0943951f * static_cast<float>(m);
+          v[static_cast<std::size_t>(m)] = distance * axis + radius * (std::cos(angle) * u + std::sin(angle) * w);
+        }
+        add(v);
+      }
+    }
+  }
+  mesh.positions.reserve(mesh.positions.size() + 1);
+  SceneGeometry g;
+  g.meshes.push_back(std::move(mesh));
   return g;
 }
 

@@ -40,4 +40,31 @@ SceneGeometry random_spheres(std::size_t n, std::uint64_t seed);
 // 3, centered at the origin, radius 0.5) as the last geometry.
 SceneGeometry mixed_spheres_and_triangles(std::size_t n_spheres, std::size_t n_triangles, std::uint64_t seed);
 
+// n clusters of `per_cluster` (1..32) different triangles whose bounding boxes are all one cube: every
+// triangle's vertices are three corners of the cube [c - r, c + r]^3 that differ in every axis, so the box of
+// each (and its centre, the centroid a builder bins by) is exactly the cube and its centre c. No split by box
+// centres separates a cluster, so a builder keeps it in one leaf (or splits it by count): the scene that
+// shows a leaf's primitive count stored in too few bits. Centres lie on a grid of 2^-6 in [-1, 1]^3 and r
+// is a multiple of 2^-6, so c +- r is exact. One mesh, geom_id 0.
+SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t seed);
+
+// Nested levels around the origin, the scene that makes a SAH tree deep along one ray: level j (0 ..
+// levels - 1, at most kMaxNestLevels) holds triangles at distance about s_j = 2^(36 - 3j/2) from the origin,
+// in the cone of directions around the diagonal (1, 1, 1), and the same again mirrored in x (around
+// (-1, 1, 1)). Levels shrink geometrically toward the origin, so a SAH or midpoint builder peels
+// them off one by one: the box of the inner levels contains the origin and the outer level's box lies
+// farther out, so a ray from the origin enters the inner box first (at t = tmin) and the level's box later.
+// A traversal that visits the nearer child first therefore keeps one pending entry per level, and the
+// closest hit (the innermost level in the ray's direction) is among the last entries pushed. Level j holds
+// ceil(1.15^(levels - 1 - j)) triangles: the outer levels hold more primitives than all the levels inside
+// them together weigh in SAH cost, which is what keeps a SAH builder from grouping several levels per split
+// (with equal counts it groups about three). The outer levels' many triangles give every ray into a cone an
+// early hit, where an any-hit query stops; so each cone has a tunnel, directions within 0.1 radian of its
+// axis, that only the innermost three levels cross, each with one more (small) triangle across it: rays
+// along it hit nothing before the innermost levels. The scales stay within [2^-36, 2^36], where every
+// product of three coordinates a float triangle test forms (with a unit direction) is a normal float, with a
+// margin. One mesh, geom_id 0.
+inline constexpr int kMaxNestLevels = 49;
+SceneGeometry nested_levels(int levels, std::uint64_t seed);
+
 }  // namespace twinray

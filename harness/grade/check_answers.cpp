@@ -6,6 +6,9 @@
 //   spheres       rays at spheres from outside, inside, near and at the tangent
 //   ties          rays at exactly duplicated triangles, judged by the tie rule (hit.h) whether or not the
 //                 plugin claims it (the suite decides, with "required": "if-claimed", whether it counts)
+//   deep-tree     rays from a point at the triangles of a scene nested around it (procedural:nest), every
+//                 order of magnitude of distance equally often: a tree as deep as the nesting, one pending
+//                 entry per level, the closest hit among the last pushed (a fixed traversal stack that drops)
 
 #include "core/util/input_error.h"
 #include "harness/grade/answers.h"
@@ -78,6 +81,10 @@ RaySet rays_for(CheckContext& ctx) {
       if (!scene.geometry.has_triangles()) suite_error(ctx, "a ties check needs a scene with (duplicated) triangles");
       set.queries = Queries::Closest;
       set.rays = tie_rays(scene, count, spec.seed);
+      break;
+    case Category::DeepTree:
+      if (!scene.geometry.has_triangles()) suite_error(ctx, "a deep-tree check needs a scene with triangles");
+      set.rays = deep_tree_rays(scene, count, spec.seed, spec.origin);
       break;
     default: throw std::logic_error("not an answer check");
   }

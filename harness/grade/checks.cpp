@@ -122,7 +122,8 @@ CheckVerdict run_check(CheckContext& context) {
     case Category::RayInterval:
     case Category::AxisAligned:
     case Category::Spheres:
-    case Category::Ties: return run_answer_check(context);
+    case Category::Ties:
+    case Category::DeepTree: return run_answer_check(context);
     case Category::Watertight: return run_watertight_check(context);
     case Category::ThreadSafety: return run_thread_safety_check(context);
     case Category::Determinism: return run_determinism_check(context);

@@ -200,4 +200,42 @@ std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t s
   return rays;
 }
 
+std::vector<Ray> deep_tree_rays(const Scene& scene, std::size_t count, std::uint64_t seed,
+                                std::optional<glm::vec3> origin) {
+  const glm::vec3 org = origin.value_or(glm::vec3(0.0f));
+  struct Triangle {
+    const TriangleMesh* mesh;
+    glm::uvec3 tri;
+  };
+  // Keyed by the binary exponent of the centroid's distance; a std::map keeps the groups in a fixed order.
+  std::map<int, std::vector<Triangle>> groups;
+  for (const TriangleMesh& mesh : scene.geometry.meshes) {
+    for (const glm::uvec3& tri : mesh.indices) {
+      const glm::vec3 centroid = (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0f;
+      int exponent = 0;
+      std::frexp(glm::length(glm::dvec3(centroid) - glm::dvec3(org)), &exponent);
+      groups[exponent].push_back({&mesh, tri});
+    }
+  }
+  std::vector<Ray> rays;
+  if (groups.empty()) return rays;
+  std::vector<const std::vector<Triangle>*> order;
+  for (const auto& [exponent, triangles] : groups) order.push_back(&triangles);
+  Rng rng = Rng::keyed(seed, 0xdee9, 5);
+  rays.reserve(count);
+  while (rays.size() < count) {
+    const std::vector<Triangle>& group = *order[rng.next_below(static_cast<std::uint32_t>(order.size()))];
+    const Triangle& t = group[rng.next_below(static_cast<std::uint32_t>(group.size()))];
+    // Barycentrics at least 0.1 from every edge (as tie_rays): the ray crosses the triangle's interior.
+    const glm::vec3 b = 0.1f + 0.7f * sample_uniform_triangle(next2(rng));
+    const glm::vec3 target =
+        b[0] * t.mesh->positions[t.tri[0]] + b[1] * t.mesh->positions[t.tri[1]] + b[2] * t.mesh->positions[t.tri[2]];
+    if (target == org) continue;
+    // A unit direction: target - org spans 2^72 in length on a nested scene, and a float test multiplies
+    // the direction into products of coordinates that must stay normal floats.
+    rays.push_back(make(org, glm::vec3(glm::normalize(glm::dvec3(target) - glm::dvec3(org)))));
+  }
+  return rays;
+}
+
 }  // namespace twinray::grade

@@ -54,4 +54,12 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
 // random points around the scene: on duplicated geometry every one is an exact tie.
 std::vector<Ray> tie_rays(const Scene& scene, std::size_t count, std::uint64_t seed);
 
+// Rays from `origin` (default the origin of coordinates) at interior points of the scene's triangles, for
+// the deep-tree check: the triangles are grouped by the binary order of magnitude of their distance from
+// `origin` (floor(log2)), and every ray picks a group uniformly, then a triangle in it, so that the few
+// triangles of the innermost levels of a nested scene (procedural:nest) are aimed at as often as the many
+// of the outer ones. Closest and any-hit.
+std::vector<Ray> deep_tree_rays(const Scene& scene, std::size_t count, std::uint64_t seed,
+                                std::optional<glm::vec3> origin);
+
 }  // namespace twinray::grade

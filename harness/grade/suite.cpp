@@ -123,6 +123,7 @@ std::vector<std::string_view> parameters_of(Category c) {
     case Category::Determinism: return {"rays", "count"};
     case Category::Performance: return {"rays", "count", "thresholds"};
     case Category::TreeQuality: return {"rays", "count", "thresholds"};
+    case Category::DeepTree: return {"count", "reference", "origin"};
   }
   return {};
 }

@@ -71,7 +71,8 @@ struct CheckSpec {
   int threads = 8;                         // thread-safety
   int repeat = 2;                          // thread-safety: at least this many rounds...
   double min_seconds = 1.0;                // ...and more until this much concurrent work is done
-  std::optional<glm::vec3> origin;         // watertight: the interior point rays start from
+  std::optional<glm::vec3> origin;         // watertight: the interior point rays start from; deep-tree: the point
+                                           // the scene nests around (default the origin of coordinates)
   Thresholds thresholds;
 };
 

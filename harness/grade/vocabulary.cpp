@@ -27,6 +27,7 @@ std::string_view to_string(Category c) {
     case Category::Determinism: return "determinism";
     case Category::Performance: return "performance";
     case Category::TreeQuality: return "tree-quality";
+    case Category::DeepTree: return "deep-tree";
   }
   return "?";
 }
@@ -62,6 +63,7 @@ bool is_correctness_category(Category c) {
     case Category::Watertight:
     case Category::Spheres:
     case Category::Ties:
+    case Category::DeepTree:
       return true;
     default:
       return false;

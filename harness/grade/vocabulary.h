@@ -4,7 +4,7 @@
 //
 //   outcome     pass, fail, crash, timeout, skipped
 //   category    build, closest-hit, any-hit, ray-interval, axis-aligned, watertight, spheres, ties,
-//               thread-safety, determinism, performance, tree-quality
+//               thread-safety, determinism, performance, tree-quality, deep-tree
 //   visibility  visible, hidden, after_due_date, after_published (Gradescope's own four values)
 //   required    true, false, "if-claimed" (required only when the plugin claims the property: watertight,
 //               honours ties)
@@ -29,6 +29,7 @@ enum class Category {
   Determinism,
   Performance,
   TreeQuality,
+  DeepTree,
 };
 
 enum class Visibility { Visible, Hidden, AfterDueDate, AfterPublished };
@@ -38,7 +39,8 @@ enum class Requirement { Required, Optional, IfClaimed };
 inline constexpr Category kAllCategories[] = {
     Category::Build,       Category::ClosestHit,   Category::AnyHit,      Category::RayInterval,
     Category::AxisAligned, Category::Watertight,   Category::Spheres,     Category::Ties,
-    Category::ThreadSafety, Category::Determinism, Category::Performance, Category::TreeQuality};
+    Category::ThreadSafety, Category::Determinism, Category::Performance, Category::TreeQuality,
+    Category::DeepTree};
 
 std::string_view to_string(Outcome o);
 std::string_view to_string(Category c);

@@ -198,6 +198,21 @@ const std::vector<Generator>& generators() {
          a.expect_count(0, 0, "");
          return sphere_sizes();
        }},
+      {{"coincident-boxes", "N:PER_CLUSTER:SEED",
+        "N clusters of PER_CLUSTER different triangles whose bounding boxes are one and the same cube"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(3, 3, "N:PER_CLUSTER:SEED");
+         return coincident_boxes(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles / 32, "N")),
+                                 static_cast<int>(a.integer(1, 1, 32, "PER_CLUSTER")),
+                                 static_cast<std::uint64_t>(a.integer(2, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+      {{"nest", "LEVELS:SEED",
+        "nested levels of triangles shrinking toward the origin (a deep tree along rays from the origin)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "LEVELS:SEED");
+         return nested_levels(static_cast<int>(a.integer(0, 1, kMaxNestLevels, "LEVELS")),
+                              static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
       {{"mixed", "NSPHERES:NTRIANGLES:SEED", "spheres and a triangle soup, ids interleaved, and a tessellated sphere"},
        [](const ProceduralArgs& a) {
          a.expect_count(3, 3, "NSPHERES:NTRIANGLES:SEED");

@@ -53,6 +53,17 @@
 //  32 ANYHIT_NO_SPHERES any-hit tests triangles only
 //  33 INDEX_20BIT       the primitive index packed into 20 bits of the leaf: triangle 2^20 + i is i
 //
+// The fourth red-team round's:
+//
+//  34 BACKFACE_CULL     triangles seen from the back are missed (Moller-Trumbore's culling branch, copied
+//                       for a renderer of closed, outward-facing meshes)
+//  35 LEAF_COUNT_3BIT   the leaf's primitive count kept in 3 bits ("leaves hold at most 4"), but the builder
+//                       keeps up to 16 primitives in a leaf that no split improves: 8 to 15 lose their last
+//                       eight, 16 test none
+//  36 NODE_INDEX_16BIT  child node indices stored in 16 bits ("64k nodes is plenty"): node 65536 + i is i
+//  37 ANYHIT_STACK_32   any-hit reuses the closest-hit traversal (nearer child first) with bug 20's stack of
+//                       32 entries that drops what does not fit, and stops at the first hit
+//
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
 // TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
@@ -296,6 +307,9 @@ struct Primitive {
     if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) return tr;
     const double det = u + v + w;
     if (det == 0.0) return tr;
+#if BUG(34)
+    if (det < 0.0) return tr;  // the back of the triangle: "culled"
+#endif
     const double t = static_cast<float>((u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det);
     if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
     tr.hit = true;
@@ -362,6 +376,15 @@ struct StackEntry {
   double entry;         // where the ray enters the node's box
   std::size_t hits_at;  // hits found when it was pushed (for bug 2)
 };
+
+// The primitives of a leaf, as the traversal reads them.
+std::size_t leaf_count(const Node& node) {
+#if BUG(35)
+  return node.size & 7u;  // three bits of a packed field
+#else
+  return node.size;
+#endif
+}
 
 constexpr std::size_t kMaxDepth = 96;
 constexpr std::size_t kBuckets = 12;
@@ -431,7 +454,7 @@ class BVH {
       const Node& node = nodes_[e.node];
       if (node.is_leaf()) {
         std::size_t i = node.start;
-        while (i < node.start + node.size - (BUG(29) ? 1 : 0)) {
+        while (i < node.start + leaf_count(node) - (BUG(29) ? 1 : 0)) {
           ++stats.primitives_tested;
           const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : bound);
           if (!t.hit) {
@@ -487,6 +510,9 @@ class BVH {
 #else
     const double tmax = ray.tmax;
 #endif
+#if BUG(37)
+    return any_hit_nearer_first(ray, tmax, stats);
+#endif
     std::array<std::size_t, kMaxDepth + 1> stack;
     std::size_t sp = 0;
     stack[sp++] = 0;
@@ -499,7 +525,7 @@ class BVH {
 #if BUG(21)
         return true;  // children are only pushed when their box is hit: "the leaf's box is hit, so it's occluded"
 #endif
-        for (std::size_t i = node.start; i < node.start + node.size - (BUG(29) ? 1 : 0); ++i) {
+        for (std::size_t i = node.start; i < node.start + leaf_count(node) - (BUG(29) ? 1 : 0); ++i) {
 #if BUG(32)
           if (primitives_[i].sphere != nullptr) continue;  // shadows come from meshes
 #endif
@@ -516,6 +542,45 @@ class BVH {
     }
     return false;
   }
+
+#if BUG(37)
+  // The closest-hit traversal, nearer child first, ending at the first hit: "any-hit is closest-hit that
+  // stops early", with the same fixed stack.
+  bool any_hit_nearer_first(const Ray& ray, double tmax, twinray_query_stats& stats) const {
+    std::array<std::size_t, 32> stack;  // "32 levels is more than any tree needs"
+    std::size_t sp = 0;
+    ++stats.nodes_visited;
+    double root_times[2] = {lowest_t(ray), tmax};
+    if (!nodes_[0].bbox.hit(ray, root_times)) return false;
+    stack[sp++] = 0;
+    while (sp > 0) {
+      const Node& node = nodes_[stack[--sp]];
+      if (node.is_leaf()) {
+        for (std::size_t i = node.start; i < node.start + node.size; ++i) {
+          ++stats.primitives_tested;
+          if (primitives_[i].hit(ray, tmax).hit) return true;
+        }
+        continue;
+      }
+      double tl[2] = {lowest_t(ray), tmax}, tr[2] = {lowest_t(ray), tmax};
+      stats.nodes_visited += 2;
+      const bool hl = nodes_[node.l].bbox.hit(ray, tl), hr = nodes_[node.r].bbox.hit(ray, tr);
+      const auto push = [&](std::size_t n) {
+        if (sp < stack.size()) stack[sp++] = n;  // full: dropped
+      };
+      const bool left_near = tl[0] <= tr[0];
+      if (hl && hr) {
+        push(left_near ? node.r : node.l);
+        push(left_near ? node.l : node.r);
+      } else if (hl) {
+        push(node.l);
+      } else if (hr) {
+        push(node.r);
+      }
+    }
+    return false;
+  }
+#endif
 
   // The unit-cost SAH of docs/plugin-abi.md: area-weighted interior nodes plus area-weighted leaf sizes.
   void stats(twinray_build_stats& s) const {
@@ -624,8 +689,13 @@ class BVH {
     const std::size_t l = build_node(start, mid, depth + 1);
     const std::size_t r = build_node(mid, end, depth + 1);
 #endif
+#if BUG(36)
+    nodes_[index].l = static_cast<std::uint16_t>(l);
+    nodes_[index].r = static_cast<std::uint16_t>(r);
+#else
     nodes_[index].l = l;
     nodes_[index].r = r;
+#endif
     return index;
   }
 
