@@ -287,7 +287,7 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
                                                  "(default: the scene's render.max_depth)");
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--splits", opt->splits, "Path continuations from each non-delta first vertex, 1 to 16 "
-                                           "(path integrator; default 2; docs/rendering.md#path-splitting)");
+                                           "(path integrator; default 4; docs/rendering.md#path-splitting)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
   cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol4d (Owen-scrambled Sobol, pairs of 2D draws as 4D points; default), "
                   "sobol (Owen-scrambled Sobol, every 2D draw on its own) or independent (PCG32)")

@@ -103,7 +103,11 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
     st.prev_delta = bs.delta;
     st.prev_bsdf_pdf = bs.pdf;
     st.prev_p = sp.p;
-    if (!survive_roulette(depth, settings_.rr_depth, st.eta_scale, st.throughput, samples[i].sampler)) return false;
+    // A continuation's throughput carries the 1/splits of its split: the roulette looks at the throughput the
+    // path would have unsplit (its survival scale times splits), or it would kill the continuations early
+    // and add back the noise the split took off (docs/rendering.md#path-splitting).
+    const float roulette_scale = st.split ? st.eta_scale * static_cast<float>(splits) : st.eta_scale;
+    if (!survive_roulette(depth, settings_.rr_depth, roulette_scale, st.throughput, samples[i].sampler)) return false;
     next = spawn_ray(sp, bs.wi);
     return true;
   };
