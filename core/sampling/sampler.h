@@ -118,7 +118,8 @@ class Sampler {
     Sampler s = *this;
     if (kind_ == SamplerKind::Independent) {
       Rng copy = rng_;
-      const std::uint64_t key = (static_cast<std::uint64_t>(copy.next_u32()) << 32) | copy.next_u32();
+      const std::uint64_t hi = copy.next_u32();
+      const std::uint64_t key = (hi << 32) | copy.next_u32();
       s.rng_ = Rng::keyed(key, j, kSplitStreamKey);
       return s;
     }
