@@ -29,6 +29,7 @@ struct CompareCommandOptions {
   int threads = 0;
   std::optional<int> rr_depth;
   std::string caustics = "auto";
+  std::optional<std::uint32_t> splits;
   std::string variant = "auto";
   std::string reference;
   std::string out;
@@ -56,6 +57,8 @@ int run_compare_command(const CompareCommandOptions& opt) {
   }
   const std::optional<CausticsMode> caustics = parse_caustics_mode(opt.caustics);
   if (!caustics) return report_bad_input("compare", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
+  if (opt.splits && (*opt.splits < 1 || *opt.splits > kMaxSplits))
+    return report_bad_input("compare", "--splits must be between 1 and " + std::to_string(kMaxSplits));
   std::string why;
   if (!compare::probe_mitsuba(&why)) return report_bad_input("compare", why);
 
@@ -71,6 +74,7 @@ int run_compare_command(const CompareCommandOptions& opt) {
   s.threads = opt.threads;
   s.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   s.caustics = *caustics;
+  if (opt.splits) s.splits = *opt.splits;
   s.mitsuba_variant = opt.variant;
   s.reference = opt.reference;
   s.out = opt.out.empty() ? std::filesystem::path("compare-" + std::filesystem::path(opt.scene).stem().string())
@@ -126,6 +130,8 @@ void add_compare_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--seed", opt->seed, "Seed (default: the scene's render.seed)");
   cmd->add_option("--threads", opt->threads, "Worker threads of both renderers (0 = all cores)")->capture_default_str();
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette depth of both renderers (default: the scene's)");
+  cmd->add_option("--splits", opt->splits, "twinray's path continuations from each first non-delta vertex, 1 to 16 "
+                                           "(as render --splits; default: render's)");
   cmd->add_option("--caustics", opt->caustics, "twinray's caustic light tracing: auto or off (docs/rendering.md)")
       ->capture_default_str();
   cmd->add_option("--variant", opt->variant, "Mitsuba variant: auto (llvm_ad_rgb, else scalar_rgb), llvm_ad_rgb, scalar_rgb")->capture_default_str();

@@ -63,6 +63,22 @@ TEST(CliContract, RenderCausticsFlagAndJsonKeys) {
   EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
 }
 
+TEST(CliContract, RenderSplitsFlagAndJsonKey) {
+  const auto dir = scratch_dir("render-splits");
+  const std::string scene = quoted(source_path("scenes/cornell-box.json"));
+  const CommandResult r = run_twinray("render " + scene + " --spp 1 --splits 2 -o " + quoted(dir / "s.exr") +
+                                      " --json " + quoted(dir / "s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json(dir / "s.json").at("splits").get<int>(), 2);
+  EXPECT_NE(r.output.find("splits 2"), std::string::npos) << r.output;
+  for (const char* bad : {"0", "17"}) {
+    const CommandResult b = run_twinray("render " + scene + " --spp 1 --splits " + bad + " -o " + quoted(dir / "bad.exr"));
+    EXPECT_EQ(b.exit_code, 2) << bad;
+    EXPECT_NE(b.output.find("--splits"), std::string::npos) << b.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
+  }
+}
+
 TEST(CliContract, InfoBuildsBackendsOnlyForGeometryPresent) {
   const auto dir = scratch_dir("info-build");
   const CommandResult r = run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) +

@@ -106,6 +106,23 @@ TEST(IntegratorAnalytic, ClosedEmissiveEnclosureFollowsTheGeometricSeries) {
   }
 }
 
+// Path splitting (IntegratorSettings::splits) keeps the estimator unbiased: the enclosure's geometric series
+// at depths 2, 3 (where the continuations carry the only bounce) and unlimited (roulette on split paths).
+TEST(IntegratorAnalytic, SplitPathsFollowTheGeometricSeries) {
+  const float Le = 1.0f, a = 0.5f;
+  Scene scene = empty_scene({0.1f, 0.2f, 0.3f}, {0.1f, 0.2f, -1.0f}, {0, 1, 0}, 90.0f, 12, 12);
+  add_box(scene, {-1, -1, -1}, {1, 1, 1}, add_material(scene, emissive(glm::vec3(Le), glm::vec3(a))), true);
+  for (const std::uint32_t splits : {2u, 3u})
+    for (int k : {2, 3, -1}) {
+      RenderOptions o = path_options(48, k);
+      o.settings.splits = splits;
+      const Rendered r = render_scene(scene, o);
+      const double expected = k < 0 ? Le / (1.0 - a) : Le * (1.0 - std::pow(a, k)) / (1.0 - a);
+      SCOPED_TRACE(::testing::Message() << "splits " << splits << ", max depth " << k);
+      expect_region(r, 0, expected, all_pixels, "enclosure");
+    }
+}
+
 // Irradiance at p from a uniform polygonal Lambertian emitter (Lambert's formula):
 //   E = Le / 2 * sum_i angle(v_i, v_i+1) * (n . normalize(v_i x v_i+1)),  v_i = corner_i - p.
 double polygon_irradiance(const std::vector<glm::dvec3>& corners, glm::dvec3 p, glm::dvec3 n, double Le) {

@@ -1,6 +1,6 @@
 // The wavefront path tracer (core/render/path_integrator.h) advances a batch of paths together; every
 // sample must still get exactly the radiance it gets when traced alone, whatever the batch size (batches
-// larger than PathIntegrator::kMaxBatch are traced in chunks).
+// larger than PathIntegrator::kMaxBatch are traced in chunks), with path splitting too.
 
 #include "render_test_util.h"
 
@@ -36,9 +36,11 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
   const PinholeCamera camera(scene.camera);
 
   for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d})
-  for (const int max_depth : {-1, 6}) {
+  for (const int max_depth : {-1, 6})
+  for (const std::uint32_t splits : {1u, 3u}) {
     IntegratorSettings settings;
     settings.max_depth = max_depth;
+    settings.splits = splits;
     const PathIntegrator integrator(ctx, settings);
     // 300 samples: one full chunk of 256 and a partial one; several samples per pixel of a 10 x 10 patch
     // around the glass ball.
@@ -62,7 +64,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
     for (std::size_t k = 0; k < kSamples; ++k) {
       FirstHitInfo lone_first;
       const glm::vec3 L = integrator.radiance(lone[k].ray, lone[k].sampler, lone_counters, &lone_first);
-      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth << ", " << to_string(kind);
+      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth << ", " << to_string(kind) << ", splits " << splits;
       EXPECT_EQ(first[k].hit, lone_first.hit);
       EXPECT_EQ(bits(first[k].normal), bits(lone_first.normal));
       EXPECT_EQ(first[k].depth, lone_first.depth);

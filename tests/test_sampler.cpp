@@ -201,6 +201,52 @@ TEST(Sobol4dSampler, OneDimensionalDrawsLeaveThePairAlone) {
   }
 }
 
+TEST(SamplerSplit, ContinuationsOfAPixelStratifyAsOneSet) {
+  // 16 samples of a pixel, each split into 4 continuations after its first two 2D draws: the 64
+  // continuations' next 2D draws are samples s * 4 + j of the same dimensions, so one point in each
+  // elementary interval of 64 cells (a (0, 6, 2)-net); with Sobol4d the draw after that completes the pair
+  // (dimensions 2 and 3: a (1, 6, 2)-net). Without the split index (all 4 continuations of a sample the
+  // same) there would be only 16 distinct points.
+  constexpr int kSamples = 16, kSplits = 4;
+  for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d})
+    for (std::uint64_t pixel : {3ull, 4242ull}) {
+      std::vector<std::array<float, 2>> first, second;
+      for (int s = 0; s < kSamples; ++s) {
+        Sampler parent(kind, 5, pixel, static_cast<std::uint32_t>(s));
+        (void)parent.next_2d();
+        (void)parent.next_2d();
+        for (std::uint32_t j = 0; j < kSplits; ++j) {
+          Sampler c = parent.split(j, kSplits);
+          const glm::vec2 a = c.next_2d(), b = c.next_2d();
+          first.push_back({a.x, a.y});
+          second.push_back({b.x, b.y});
+        }
+      }
+      EXPECT_TRUE(is_net(first, 0)) << to_string(kind) << " pixel " << pixel;
+      EXPECT_TRUE(is_net(second, kind == SamplerKind::Sobol4d ? 1 : 0)) << to_string(kind) << " pixel " << pixel;
+    }
+}
+
+TEST(SamplerSplit, OneContinuationIsTheSamplerItselfAndIndependentStreamsDiffer) {
+  // (After a whole Sobol4d pair: a split always starts a new pair.)
+  for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d}) {
+    Sampler a(kind, 1, 2, 3);
+    (void)a.next_2d();
+    (void)a.next_2d();
+    Sampler b = a.split(0, 1);
+    for (int d = 0; d < 5; ++d) EXPECT_EQ(a.next_2d(), b.next_2d()) << to_string(kind) << " draw " << d;
+  }
+  // Independent: continuations draw from unrelated streams, none of them the parent's own.
+  Sampler parent(SamplerKind::Independent, 1, 2, 3);
+  (void)parent.next_2d();
+  std::set<float> firsts;
+  for (std::uint32_t j = 0; j < 8; ++j) firsts.insert(parent.split(j, 8).next_1d());
+  firsts.insert(Sampler(parent).next_1d());
+  EXPECT_EQ(firsts.size(), 9u);
+  // split() leaves the parent unchanged: the same continuation twice.
+  EXPECT_EQ(parent.split(2, 8).next_2d(), parent.split(2, 8).next_2d());
+}
+
 TEST(SobolSampler, OneDimensionalDrawsStratify) {
   constexpr int kN = 32;
   for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d}) {

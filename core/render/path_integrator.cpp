@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <optional>
 
 namespace twinray {
 namespace {
@@ -22,6 +23,7 @@ struct PathState {
   // The light tracer counts this path's emission when the last vertex was delta (light_tracer.h): set at a
   // non-delta first vertex when light_traced_caustics is on.
   bool caustic_by_light_tracer = false;
+  bool split = false;  // splitting: the path's continuations have been split off (only once per path)
 };
 
 // Paths still going, compacted after every segment: rays[a] and hits[a] belong to path active[a]. Vertices
@@ -39,6 +41,13 @@ struct ChunkScratch {
   std::array<Ray, kCapacity> shadow_rays;
   std::array<glm::vec3, kCapacity> shadow_contribution;
   std::array<std::uint16_t, kCapacity> shadow_owner;
+  // Splitting: the first non-delta vertices waiting for their continuations, each with its path, the
+  // segments that reached it, the path's state and its sampler as they were before its BSDF sample.
+  std::array<SurfacePoint, kCapacity> split_vertex;
+  std::array<std::uint16_t, kCapacity> split_path;
+  std::array<int, kCapacity> split_depth;
+  std::array<PathState, kCapacity> split_state;
+  std::array<std::optional<Sampler>, kCapacity> split_sampler;  // Sampler has no default state
 };
 
 }  // namespace
@@ -67,12 +76,13 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
                                  std::span<FirstHitInfo> first, TraceCounters& counters) const {
   const SamplingStrategy strategy = settings_.strategy;
   const std::size_t n = samples.size();
+  const std::uint32_t splits = std::max(settings_.splits, 1u);
   // The chunk's working arrays: per thread and reused, because constructing them (their members have
   // default initialisers) cost about 2% of the render per chunk of 256 samples. Every entry is written
   // before it is read.
   static thread_local ChunkScratch<kCapacity> scratch;
   auto& [state, active, rays, hits, vertex, vertex_path, u_light, u_bsdf, shadow_rays, shadow_contribution,
-         shadow_owner] = scratch;
+         shadow_owner, split_vertex, split_path, split_depth, split_state, split_sampler] = scratch;
 
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = glm::vec3(0.0f);
@@ -80,82 +90,137 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
     active[i] = static_cast<std::uint16_t>(i);
     rays[i] = samples[i].ray;
   }
+
+  // The BSDF sample at vertex sp of path i, the roulette, and the path's next ray (false: the path ends).
+  // `scale` is 1 / (the number of continuations the path takes from this vertex).
+  const auto continue_path = [&](int depth, const SurfacePoint& sp, std::uint16_t i, glm::vec2 u, float scale,
+                                 Ray& next) {
+    PathState& st = state[i];
+    BsdfSample bs;
+    if (!sp.bsdf().sample(sp.wo, sp.ng, u, bs) || max_component(bs.weight) <= 0.0f) return false;
+    st.throughput *= scale == 1.0f ? bs.weight : bs.weight * scale;
+    st.eta_scale *= bs.eta_ti * bs.eta_ti;
+    st.prev_delta = bs.delta;
+    st.prev_bsdf_pdf = bs.pdf;
+    st.prev_p = sp.p;
+    // A continuation's throughput carries the 1/splits of its split: the roulette looks at the throughput the
+    // path would have unsplit (its survival scale times splits), or it would kill the continuations early
+    // and add back the noise the split took off (docs/rendering.md#path-splitting).
+    const float roulette_scale = st.split ? st.eta_scale * static_cast<float>(splits) : st.eta_scale;
+    if (!survive_roulette(depth, settings_.rr_depth, roulette_scale, st.throughput, samples[i].sampler)) return false;
+    next = spawn_ray(sp, bs.wi);
+    return true;
+  };
+
   // Each segment in stages, each stage a loop over the paths: short loop bodies whose iterations are
-  // independent, so the core overlaps them.
-  std::size_t n_active = n;
-  for (int depth = 1; n_active > 0; ++depth) {
-    counters.closest_hit_rays += n_active;
-    for (std::size_t a = 0; a < n_active; ++a) ctx_.backend->intersect(rays[a], hits[a], counters.query_stats());
+  // independent, so the core overlaps them. With splitting, a path stops at its first non-delta vertex
+  // (after its light sample) and waits there for its continuations: n_split of them, in order of depth.
+  std::size_t n_split = 0;
+  const auto advance = [&](int first_depth, std::size_t n_active) {
+    for (int depth = first_depth; n_active > 0; ++depth) {
+      counters.closest_hit_rays += n_active;
+      for (std::size_t a = 0; a < n_active; ++a) ctx_.backend->intersect(rays[a], hits[a], counters.query_stats());
 
-    // Hits: escaped radiance, emission, and the vertices that scatter.
-    const bool last_segment = settings_.max_depth >= 0 && depth >= settings_.max_depth;
-    std::size_t n_vertices = 0;
-    for (std::size_t a = 0; a < n_active; ++a) {
-      const std::uint16_t i = active[a];
-      const PathState& st = state[i];
-      const Hit& hit = hits[a];
-      if (!hit.found()) {
-        out[i] += st.throughput * escaped_radiance(ctx_, rays[a].dir, strategy, st.prev_delta, st.prev_bsdf_pdf);
-        continue;
+      // Hits: escaped radiance, emission, and the vertices that scatter.
+      const bool last_segment = settings_.max_depth >= 0 && depth >= settings_.max_depth;
+      std::size_t n_vertices = 0;
+      for (std::size_t a = 0; a < n_active; ++a) {
+        const std::uint16_t i = active[a];
+        const PathState& st = state[i];
+        const Hit& hit = hits[a];
+        if (!hit.found()) {
+          out[i] += st.throughput * escaped_radiance(ctx_, rays[a].dir, strategy, st.prev_delta, st.prev_bsdf_pdf);
+          continue;
+        }
+        const SurfacePoint sp = make_surface_point(ctx_, rays[a], hit);
+        if (depth == 1 && !first.empty()) record_first_hit(&first[i], sp, hit.t);
+        // Emission after a delta vertex behind a non-delta first vertex belongs to the light tracer.
+        if (sp.geom->emissive && !(st.caustic_by_light_tracer && st.prev_delta))
+          out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p);
+        if (last_segment || sp.bsdf().is_black()) continue;
+        vertex[n_vertices] = sp;
+        vertex_path[n_vertices] = i;
+        ++n_vertices;
       }
-      const SurfacePoint sp = make_surface_point(ctx_, rays[a], hit);
-      if (depth == 1 && !first.empty()) record_first_hit(&first[i], sp, hit.t);
-      // Emission after a delta vertex behind a non-delta first vertex belongs to the light tracer.
-      if (sp.geom->emissive && !(st.caustic_by_light_tracer && st.prev_delta))
-        out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p);
-      if (last_segment || sp.bsdf().is_black()) continue;
-      vertex[n_vertices] = sp;
-      vertex_path[n_vertices] = i;
-      ++n_vertices;
-    }
 
-    // Sampler dimensions of a vertex: the light sample (2D; drawn at delta vertices too, unused there, so
-    // that every vertex takes the same dimensions), the BSDF sample (2D), the roulette (1D, only once it
-    // plays).
-    for (std::size_t v = 0; v < n_vertices; ++v) {
-      Sampler& sampler = samples[vertex_path[v]].sampler;
-      u_light[v] = sampler.next_2d();
-      u_bsdf[v] = sampler.next_2d();
-    }
+      // Sampler dimensions of a vertex: the light sample (2D; drawn at delta vertices too, unused there, so
+      // that every vertex takes the same dimensions), the BSDF sample (2D), the roulette (1D, only once it
+      // plays). A vertex that is split keeps its path's sampler as it is after the light sample: each
+      // continuation draws the BSDF sample and everything after from its own Sampler::split.
+      const auto splits_at = [&](std::size_t v) {
+        return splits > 1 && !state[vertex_path[v]].split && !vertex[v].bsdf().is_delta();
+      };
+      for (std::size_t v = 0; v < n_vertices; ++v) {
+        const std::uint16_t i = vertex_path[v];
+        Sampler& sampler = samples[i].sampler;
+        u_light[v] = sampler.next_2d();
+        if (splits_at(v)) split_sampler[i].emplace(sampler);
+        u_bsdf[v] = sampler.next_2d();
+      }
 
-    // Light samples at the non-delta vertices.
-    std::size_t n_shadow = 0;
-    for (std::size_t v = 0; v < n_vertices; ++v) {
-      if (vertex[v].bsdf().is_delta()) continue;
-      ShadowQuery q;
-      if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q)) continue;
-      const std::uint16_t i = vertex_path[v];
-      shadow_rays[n_shadow] = q.ray;
-      shadow_contribution[n_shadow] = state[i].throughput * q.contribution;
-      shadow_owner[n_shadow] = i;
-      ++n_shadow;
-    }
+      // Light samples at the non-delta vertices.
+      std::size_t n_shadow = 0;
+      for (std::size_t v = 0; v < n_vertices; ++v) {
+        if (vertex[v].bsdf().is_delta()) continue;
+        ShadowQuery q;
+        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q)) continue;
+        const std::uint16_t i = vertex_path[v];
+        shadow_rays[n_shadow] = q.ray;
+        shadow_contribution[n_shadow] = state[i].throughput * q.contribution;
+        shadow_owner[n_shadow] = i;
+        ++n_shadow;
+      }
 
-    // BSDF samples, roulette, the next segment's rays.
-    std::size_t n_next = 0;
-    for (std::size_t v = 0; v < n_vertices; ++v) {
-      const SurfacePoint& sp = vertex[v];
-      const std::uint16_t i = vertex_path[v];
-      PathState& st = state[i];
-      if (depth == 1) st.caustic_by_light_tracer = settings_.light_traced_caustics && !sp.bsdf().is_delta();
-      BsdfSample bs;
-      if (!sp.bsdf().sample(sp.wo, sp.ng, u_bsdf[v], bs) || max_component(bs.weight) <= 0.0f) continue;
-      st.throughput *= bs.weight;
-      st.eta_scale *= bs.eta_ti * bs.eta_ti;
-      st.prev_delta = bs.delta;
-      st.prev_bsdf_pdf = bs.pdf;
-      st.prev_p = sp.p;
-      if (!survive_roulette(depth, settings_.rr_depth, st.eta_scale, st.throughput, samples[i].sampler)) continue;
-      rays[n_next] = spawn_ray(sp, bs.wi);
-      active[n_next] = i;
-      ++n_next;
-    }
+      // BSDF samples, roulette, the next segment's rays.
+      std::size_t n_next = 0;
+      for (std::size_t v = 0; v < n_vertices; ++v) {
+        const SurfacePoint& sp = vertex[v];
+        const std::uint16_t i = vertex_path[v];
+        if (depth == 1) state[i].caustic_by_light_tracer = settings_.light_traced_caustics && !sp.bsdf().is_delta();
+        if (splits_at(v)) {
+          state[i].split = true;
+          split_vertex[n_split] = sp;
+          split_path[n_split] = i;
+          split_depth[n_split] = depth;
+          split_state[n_split] = state[i];
+          ++n_split;
+          continue;
+        }
+        if (!continue_path(depth, sp, i, u_bsdf[v], 1.0f, rays[n_next])) continue;
+        active[n_next] = i;
+        ++n_next;
+      }
 
-    // The light samples of this segment, added before the next segment's emission as a lone path would.
-    counters.shadow_rays += n_shadow;
-    for (std::size_t k = 0; k < n_shadow; ++k)
-      if (!ctx_.backend->occluded(shadow_rays[k], counters.query_stats())) out[shadow_owner[k]] += shadow_contribution[k];
-    n_active = n_next;
+      // The light samples of this segment, added before the next segment's emission as a lone path would.
+      counters.shadow_rays += n_shadow;
+      for (std::size_t k = 0; k < n_shadow; ++k)
+        if (!ctx_.backend->occluded(shadow_rays[k], counters.query_stats())) out[shadow_owner[k]] += shadow_contribution[k];
+      n_active = n_next;
+    }
+  };
+
+  advance(1, n);
+  // Splitting: continuation j of every split vertex, one after the other, each carrying 1/splits of the
+  // vertex's throughput, the vertices reached by the same number of segments together. A path adds its
+  // contributions in the same order whether traced alone or in the chunk: the segments up to its split
+  // vertex, then continuation 0's, 1's, ...
+  const float split_scale = 1.0f / static_cast<float>(splits);
+  for (std::uint32_t j = 0; j < splits && n_split > 0; ++j) {
+    for (std::size_t group = 0; group < n_split;) {
+      const int depth = split_depth[group];
+      std::size_t end = group, n_next = 0;
+      for (; end < n_split && split_depth[end] == depth; ++end) {
+        const std::uint16_t i = split_path[end];
+        Sampler& sampler = samples[i].sampler;
+        sampler = split_sampler[i]->split(j, splits);
+        state[i] = split_state[end];
+        if (!continue_path(depth, split_vertex[end], i, sampler.next_2d(), split_scale, rays[n_next])) continue;
+        active[n_next] = i;
+        ++n_next;
+      }
+      advance(depth + 1, n_next);
+      group = end;
+    }
   }
 }
 

@@ -7,7 +7,9 @@
 // them counts fully. Paths end at max_depth segments, when the BSDF absorbs, or by Russian roulette from
 // rr_depth segments on (core/render/russian_roulette.h). With light_traced_caustics, emission reached right
 // after a delta vertex by a path whose first vertex is non-delta is left to the light tracer
-// (core/render/light_tracer.h), which counts those caustic paths instead.
+// (core/render/light_tracer.h), which counts those caustic paths instead. With splits > 1 a path continues
+// `splits` times from its first non-delta vertex, each continuation with 1/splits of the throughput, its own
+// Sampler::split and a roulette on the unsplit throughput (docs/rendering.md#path-splitting).
 //
 // Wavefront: the paths of a batch (one sample of each pixel of a tile) advance together, one segment at a
 // time: all their rays are traced, then every path is shaded (emission, light sample, BSDF sample,

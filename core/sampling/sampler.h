@@ -107,12 +107,35 @@ class Sampler {
   // The same as next_1d(); the name Russian roulette and other generic code call.
   float next_float() { return next_1d(); }
 
+  // A sampler for continuation j of k of this camera sample (path splitting, core/render/path_integrator.h),
+  // drawing from this one's next dimension on. Sobol and Sobol4d take the same dimensions at sample index
+  // s * k + j (s: this sampler's sample index), so a pixel's spp * k continuations are one stratified set of
+  // spp * k samples of those dimensions (spp * k must stay below 2^32). A Sobol4d pair left half drawn is not
+  // completed: the continuation starts a new pair. Independent: a PCG32 stream keyed by this stream's next
+  // 64-bit value and j (unrelated to every camera sample's own stream). With k = 1 and j = 0 the Sobol
+  // samplers return a copy of this one.
+  Sampler split(std::uint32_t j, std::uint32_t k) const {
+    Sampler s = *this;
+    if (kind_ == SamplerKind::Independent) {
+      Rng copy = rng_;
+      const std::uint64_t hi = copy.next_u32();
+      const std::uint64_t key = (hi << 32) | copy.next_u32();
+      s.rng_ = Rng::keyed(key, j, kSplitStreamKey);
+      return s;
+    }
+    s.reversed_sample_ = sobol::reverse_bits(sobol::reverse_bits(reversed_sample_) * k + j);
+    s.second_of_pair_ = false;
+    return s;
+  }
+
  private:
   std::uint64_t dimension_hash() { return mix64(pixel_key_ + 0x9E3779B97F4A7C15ull * ++dimension_); }
   // The dimension's shuffled sample index, bit-reversed: LK(reverse(sample), seed) (see next_2d).
   std::uint32_t shuffle_reversed(std::uint64_t h) const {
     return sobol::laine_karras_permutation(reversed_sample_, static_cast<std::uint32_t>(h));
   }
+
+  static constexpr std::uint64_t kSplitStreamKey = 0x73706c6974ull;  // "split"
 
   SamplerKind kind_;
   bool second_of_pair_ = false;        // Sobol4d: the next 2D draw completes the current 4D point

@@ -86,6 +86,7 @@ RendererResult render_twinray_batches(const Scene& scene, const CompareSettings&
     ro.settings.max_depth = scene.render.max_depth;
     ro.settings.rr_depth = settings.rr_depth;
     ro.caustics = settings.caustics;
+    ro.settings.splits = settings.splits;
     ro.spp = spp;
     ro.time_budget_seconds = settings.time_seconds > 0.0 ? settings.time_seconds / batches : 0.0;
     ro.seed = settings.seed + static_cast<std::uint64_t>(b);
@@ -116,7 +117,8 @@ RendererResult render_twinray_batches(const Scene& scene, const CompareSettings&
       r.image.variance_of_mean.data[i] = static_cast<float>(std::max(0.0, sum_sq[i] / n - mean * mean) / (n - 1.0));
   }
   r.means = channel_means(r.image);
-  r.extra = {{"backend", settings.backend}, {"nonfinite_samples", nonfinite}, {"caustics", to_string(settings.caustics)}};
+  r.extra = {{"backend", settings.backend}, {"nonfinite_samples", nonfinite}, {"caustics", to_string(settings.caustics)},
+             {"splits", settings.splits}};
   return r;
 }
 

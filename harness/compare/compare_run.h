@@ -36,6 +36,7 @@ struct CompareSettings {
   int threads = 0;                 // 0 = all cores
   int rr_depth = 5;
   CausticsMode caustics = CausticsMode::Auto;  // twinray's caustic light tracer (core/render/renderer.h)
+  std::uint32_t splits = IntegratorSettings{}.splits;  // twinray's path splitting (core/render/integrator.h)
   std::string mitsuba_variant = "auto";
   std::filesystem::path reference; // optional: relMSE of both against it
   std::filesystem::path out;       // output folder
