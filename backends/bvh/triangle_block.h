@@ -129,15 +129,6 @@ template <Report kReport>
   return triangle_block_detail::intersect<triangle_block_detail::Report::kHit>(ray, block, lanes, tmin, tmax, out);
 }
 
-// The same, writing only t (out.u, out.v are left as they were): for queries that want t and the winner's u, v
-// at most once, at the end (triangle_block_hit_attributes below). The closest-hit traversals use
-// intersect_triangle_block_closest instead, which also hands over each hit's crossing for those u, v, and
-// intersect_triangle_block_any is cheaper when only the answer matters.
-[[gnu::always_inline]] inline unsigned intersect_triangle_block_t(const TriangleRay& ray, const TriangleBlock& block,
-                                                                  unsigned lanes, float tmin, float tmax, BlockHits& out) {
-  return triangle_block_detail::intersect<triangle_block_detail::Report::kT>(ray, block, lanes, tmin, tmax, out);
-}
-
 // Closest hit: calls `on_hit(lane, t, crossing)` for every lane hit within [tmin, tmax], t correctly rounded
 // as above, and continues with the tmax it returns (the caller's closest t so far: the interval stays closed,
 // so a tie still reaches the caller, whose order decides it). `crossing` is what the refinement of t computed
