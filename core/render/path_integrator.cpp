@@ -81,8 +81,24 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   // default initialisers) cost about 2% of the render per chunk of 256 samples. Every entry is written
   // before it is read.
   static thread_local ChunkScratch<kCapacity> scratch;
-  auto& [state, active, rays, hits, vertex, vertex_path, u_light, u_bsdf, shadow_rays, shadow_contribution,
-         shadow_owner, split_vertex, split_path, split_depth, split_state, split_sampler] = scratch;
+  // Named references, not a structured binding: the lambdas below capture them, which clang before 16
+  // (the sanitizer build) does not allow for structured bindings.
+  auto& state = scratch.state;
+  auto& active = scratch.active;
+  auto& rays = scratch.rays;
+  auto& hits = scratch.hits;
+  auto& vertex = scratch.vertex;
+  auto& vertex_path = scratch.vertex_path;
+  auto& u_light = scratch.u_light;
+  auto& u_bsdf = scratch.u_bsdf;
+  auto& shadow_rays = scratch.shadow_rays;
+  auto& shadow_contribution = scratch.shadow_contribution;
+  auto& shadow_owner = scratch.shadow_owner;
+  auto& split_vertex = scratch.split_vertex;
+  auto& split_path = scratch.split_path;
+  auto& split_depth = scratch.split_depth;
+  auto& split_state = scratch.split_state;
+  auto& split_sampler = scratch.split_sampler;
 
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = glm::vec3(0.0f);
