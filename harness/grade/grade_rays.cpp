@@ -223,7 +223,9 @@ std::vector<Ray> deep_tree_rays(const Scene& scene, std::size_t count, std::uint
   for (const auto& [exponent, triangles] : groups) order.push_back(&triangles);
   Rng rng = Rng::keyed(seed, 0xdee9, 5);
   rays.reserve(count);
-  while (rays.size() < count) {
+  // Bounded: on a scene whose every triangle rounds to the origin point, no target differs from it, and the
+  // set stays short rather than the loop running forever.
+  for (std::size_t attempt = 0; rays.size() < count && attempt < 64 * count; ++attempt) {
     const std::vector<Triangle>& group = *order[rng.next_below(static_cast<std::uint32_t>(order.size()))];
     const Triangle& t = group[rng.next_below(static_cast<std::uint32_t>(group.size()))];
     // Barycentrics at least 0.1 from every edge (as tie_rays): the ray crosses the triangle's interior.
