@@ -164,7 +164,7 @@ SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t see
   return g;
 }
 
-SceneGeometry nested_levels(int levels, std::uint64_t seed) {
+SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone) {
   levels = std::clamp(levels, 1, kMaxNestLevels);
   constexpr float kTunnelRadians = 0.1f;
   constexpr int kBlocked = 3;
@@ -181,18 +181,20 @@ SceneGeometry nested_levels(int levels, std::uint64_t seed) {
   mesh.geom_id = 0;
   // Two cones, around (1, 1, 1) and around (-1, 1, 1). Not the opposite of the first: on a line through the
   // origin a binned builder's split near 0 takes inner levels of one cone with the other, and the chain
-  // is lost (measured: 22 pending entries at most instead of 49).
+  // is lost (measured: 22 pending entries at most instead of 49). Or the one cone asked for.
+  const std::vector<glm::vec3> cones =
+      cone ? std::vector<glm::vec3>{*cone} : std::vector<glm::vec3>{{1.0f, 1.0f, 1.0f}, {-1.0f, 1.0f, 1.0f}};
   const auto add = [&mesh](const std::array<glm::vec3, 3>& v) {
     const auto base = static_cast<std::uint32_t>(mesh.positions.size());
     mesh.positions.insert(mesh.positions.end(), v.begin(), v.end());
     mesh.indices.emplace_back(base, base + 1, base + 2);
   };
-  for (const float sign : {1.0f, -1.0f}) {
+  for (const glm::vec3& signs : cones) {
     // The tunnel: a cone of directions around the cone's axis that no level but the innermost kBlocked
     // crosses; those hold a small triangle across it. A ray along it passes every outer level's box without
     // a hit, so its only hits are among the last entries pushed, for any-hit queries too (elsewhere the many
     // triangles of the outer levels give every ray an early hit).
-    const glm::vec3 axis = glm::normalize(glm::vec3(sign, 1.0f, 1.0f));
+    const glm::vec3 axis = glm::normalize(signs);
     const float tunnel_cos = std::cos(kTunnelRadians);
     const auto crosses_tunnel = [&](const std::array<glm::vec3, 3>& v) {
       constexpr int kSteps = 16;  // points of the triangle every 1/16 of its edges
@@ -214,7 +216,7 @@ SceneGeometry nested_levels(int levels, std::uint64_t seed) {
           for (glm::vec3& p : v) {
             const float along = distance * (0.9f + 0.2f * rng.next_float());
             for (int a = 0; a < 3; ++a) p[a] = along * (0.6f + 0.8f * rng.next_float());
-            p.x *= sign;
+            p *= signs;
           }
           for (int m = 0; m < 3; ++m) unit[static_cast<std::size_t>(m)] = v[static_cast<std::size_t>(m)] / scale;
         } while (glm::length(glm::cross(unit[1] - unit[0], unit[2] - unit[0])) < 1e-3f ||

@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 namespace twinray {
 
@@ -65,6 +66,9 @@ SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t see
 // product of three coordinates a float triangle test forms (with a unit direction) is a normal float, with a
 // margin. One mesh, geom_id 0.
 inline constexpr int kMaxNestLevels = 49;
-SceneGeometry nested_levels(int levels, std::uint64_t seed);
+// `cone`, given, replaces the two cones by one around it (components +-1): around (-1, -1, -1) every inner
+// level lies on the high side of every split plane, the child a traversal that pushes left then right visits
+// first (see docs/grading.md, "The deep-tree scene").
+SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone = std::nullopt);
 
 }  // namespace twinray

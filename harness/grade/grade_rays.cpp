@@ -159,11 +159,16 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
     const glm::vec3 helper = std::fabs(away.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
     const glm::vec3 across = glm::normalize(glm::cross(away, helper));
     const glm::vec3 from = s.center + (2.0f + 8.0f * rng.next_float()) * s.radius * away;
-    switch ((i / spheres.size()) % 6) {
-      case 0: {  // from outside at a point of the disc
-        const glm::vec2 d = sample_concentric_disk(next2(rng)) * 0.9f;
-        const glm::vec3 across2 = glm::cross(away, across);
-        rays.push_back(make(from, s.center + s.radius * (d.x * across + d.y * across2) - from));
+    const auto disc_point = [&] {
+      const glm::vec2 d = sample_concentric_disk(next2(rng)) * 0.9f;
+      const glm::vec3 across2 = glm::cross(away, across);
+      return s.center + s.radius * (d.x * across + d.y * across2);
+    };
+    switch ((i / spheres.size()) % 7) {
+      case 0: rays.push_back(make(from, disc_point() - from)); break;  // from outside at a point of the disc
+      case 6: {  // the same from far away, 2,000 to 20,000 radii
+        const glm::vec3 far = s.center + (2e3f + 1.8e4f * rng.next_float()) * s.radius * away;
+        rays.push_back(make(far, disc_point() - far));
         break;
       }
       case 1:  // from inside

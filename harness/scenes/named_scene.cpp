@@ -206,12 +206,25 @@ const std::vector<Generator>& generators() {
                                  static_cast<int>(a.integer(1, 1, 32, "PER_CLUSTER")),
                                  static_cast<std::uint64_t>(a.integer(2, 0, std::numeric_limits<long long>::max(), "SEED")));
        }},
-      {{"nest", "LEVELS:SEED",
-        "nested levels of triangles shrinking toward the origin (a deep tree along rays from the origin)"},
+      {{"nest", "LEVELS:SEED[:SX:SY:SZ]",
+        "nested levels of triangles shrinking toward the origin (a deep tree along rays from the origin), in two "
+        "cones or in the one around (SX, SY, SZ), each 1 or -1"},
        [](const ProceduralArgs& a) {
-         a.expect_count(2, 2, "LEVELS:SEED");
+         if (a.size() != 2 && a.size() != 5) a.expect_count(2, 2, "LEVELS:SEED[:SX:SY:SZ]");
+         std::optional<glm::vec3> cone;
+         if (a.size() == 5) {
+           glm::vec3 signs;
+           for (int k = 0; k < 3; ++k) {
+             const char* name = k == 0 ? "SX" : (k == 1 ? "SY" : "SZ");
+             const long long sign = a.integer(static_cast<std::size_t>(2 + k), -1, 1, name);
+             if (sign == 0) a.fail(fmt::format("{} must be 1 or -1, got 0", name));
+             signs[k] = static_cast<float>(sign);
+           }
+           cone = signs;
+         }
          return nested_levels(static_cast<int>(a.integer(0, 1, kMaxNestLevels, "LEVELS")),
-                              static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+                              static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")),
+                              cone);
        }},
       {{"mixed", "NSPHERES:NTRIANGLES:SEED", "spheres and a triangle soup, ids interleaved, and a tessellated sphere"},
        [](const ProceduralArgs& a) {
