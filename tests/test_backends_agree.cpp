@@ -186,46 +186,54 @@ TEST(BackendsAgree, WatertightFromInsideClosedSpheres) {
   }
 }
 
-// The deep-tree grading scene (procedural:nest, 49 levels nested around the origin): the trees of bvh and bvh8
-// are far deeper than on any ordinary scene, and must stay within the depth their fixed traversal stacks are
-// sized for (kBvhMaxDepth, kWideMaxDepth) and answer the grader's rays from the origin like brute force.
+// The deep-tree grading scenes (procedural:nest, 49 levels nested around the origin, in two cones or in the
+// one around (-1, -1, -1)): the trees of bvh and bvh8 are far deeper than on any ordinary scene, and must stay
+// within the depth their fixed traversal stacks are sized for (kBvhMaxDepth, kWideMaxDepth) and answer the
+// grader's rays from the origin like brute force.
 TEST(BackendsAgree, DeepNestedTreeStaysWithinStackAndAnswersLikeBrute) {
   const ScopedFlushDenormals ftz;
-  const Scene scene = wrap(nested_levels(kMaxNestLevels, 1));
-  const std::vector<Ray> rays = grade::deep_tree_rays(scene, 3000, 5, std::nullopt);
-  ASSERT_EQ(rays.size(), 3000u);
-  const crosscheck::GeometryIndex index(scene.geometry);
-  auto brute = make_backend("brute");
-  brute->build(scene.geometry);
-  std::vector<Hit> expected(rays.size());
-  std::vector<std::uint8_t> expected_occluded(rays.size());
-  brute->intersect(rays, expected);
-  brute->occluded(rays, expected_occluded);
-  std::size_t hits = 0;
-  for (const Hit& h : expected) hits += h.found() ? 1 : 0;
-  EXPECT_EQ(hits, rays.size());  // every ray is aimed at the interior of a triangle
-  for (const char* name : {"bvh", "bvh8", "embree"}) {
-    SCOPED_TRACE(name);
-    auto backend = make_backend(name);
-    backend->build(scene.geometry);
-    const BuildStats stats = backend->build_stats();
-    if (std::string(name) == "bvh") {
-      // Deep: a fixed 32-entry stack would overflow along these rays (the point of the scene), and within
-      // the cap that sizes bvh's stack.
-      EXPECT_GT(stats.max_depth, 32u);
-      EXPECT_LT(stats.max_depth, kBvhMaxDepth);
+  struct Nest {
+    std::optional<glm::vec3> cone;
+    std::size_t rays;
+  };
+  for (const Nest& nest : {Nest{std::nullopt, 3000}, Nest{glm::vec3(-1.0f), 1000}}) {
+    SCOPED_TRACE(nest.cone ? "one cone around (-1, -1, -1)" : "two cones");
+    const Scene scene = wrap(nested_levels(kMaxNestLevels, 1, nest.cone));
+    const std::vector<Ray> rays = grade::deep_tree_rays(scene, nest.rays, 5, std::nullopt);
+    ASSERT_EQ(rays.size(), nest.rays);
+    const crosscheck::GeometryIndex index(scene.geometry);
+    auto brute = make_backend("brute");
+    brute->build(scene.geometry);
+    std::vector<Hit> expected(rays.size());
+    std::vector<std::uint8_t> expected_occluded(rays.size());
+    brute->intersect(rays, expected);
+    brute->occluded(rays, expected_occluded);
+    std::size_t hits = 0;
+    for (const Hit& h : expected) hits += h.found() ? 1 : 0;
+    EXPECT_EQ(hits, rays.size());  // every ray is aimed at the interior of a triangle
+    for (const char* name : {"bvh", "bvh8", "embree"}) {
+      SCOPED_TRACE(name);
+      auto backend = make_backend(name);
+      backend->build(scene.geometry);
+      const BuildStats stats = backend->build_stats();
+      if (std::string(name) == "bvh") {
+        // Deep: a fixed 32-entry stack would overflow along these rays (the point of the scene), and within
+        // the cap that sizes bvh's stack.
+        EXPECT_GT(stats.max_depth, 32u);
+        EXPECT_LT(stats.max_depth, kBvhMaxDepth);
+      }
+      if (std::string(name) == "bvh8") {
+        EXPECT_LE(stats.max_depth, kWideMaxDepth);
+      }
+      std::vector<Hit> hit(rays.size());
+      std::vector<std::uint8_t> occluded(rays.size());
+      backend->intersect(rays, hit);
+      backend->occluded(rays, occluded);
+      const crosscheck::PairComparison c = crosscheck::compare(index, rays, hit, expected, occluded, expected_occluded);
+      EXPECT_EQ(c.genuine, 0u);
+      EXPECT_EQ(c.occlusion_genuine, 0u);
+      EXPECT_GE(c.identical_fraction(), 0.999);
     }
-    if (std::string(name) == "bvh8") {
-      EXPECT_LE(stats.max_depth, kWideMaxDepth);
-    }
-    std::vector<Hit> hit(rays.size());
-    std::vector<std::uint8_t> occluded(rays.size());
-    backend->intersect(rays, hit);
-    backend->occluded(rays, occluded);
-    const crosscheck::PairComparison c = crosscheck::compare(index, rays, hit, expected, occluded, expected_occluded);
-    EXPECT_EQ(c.genuine, 0u);
-    EXPECT_EQ(c.occlusion_genuine, 0u);
-    EXPECT_GE(c.identical_fraction(), 0.999);
   }
 }
 

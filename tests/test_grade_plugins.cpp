@@ -117,7 +117,14 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"backface-cull", "closest-soup", Outcome::Fail, "answers wrong", "spheres-sizes"},
                       // Leaves of 8 to 16 primitives occur where no split separates them: clusters of different
                       // triangles with one bounding box (procedural:coincident-boxes).
-                      BugCase{"leaf-count-3bit", "closest-coincident", Outcome::Fail, "answers wrong", "closest-soup"}),
+                      BugCase{"leaf-count-3bit", "closest-coincident", Outcome::Fail, "answers wrong", "closest-soup"},
+                      // The fifth round's: the textbook quadratic in float loses a sphere seen from thousands of
+                      // radii away (sphere rays from 2,000 to 20,000 radii); an any-hit that pushes the left
+                      // child, then the right, on 32 entries overflows where every inner level is a right child
+                      // (the nest's one cone around (-1, -1, -1)).
+                      BugCase{"sphere-naive", "spheres-sizes", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"anyhit-fixed-order-32", "deep-tree-nest-negative", Outcome::Fail,
+                              "plugin says not occluded", "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -407,6 +414,14 @@ TEST(GradePlugins, QuickSuiteCatchesAMeshIndexReportedAsGeomId) {
   s.only = {"closest-mixed"};
   const Scorecard good = run_grade(s);
   EXPECT_EQ(check_named(good, "closest-mixed").outcome, Outcome::Pass) << lines(good);
+}
+
+// The checks made for the fifth round's bugs fail no correct BVH: the brute-force plugin (no tree at all, the
+// textbook's robust sphere test) passes them as the correct scotty does (CorrectPluginGetsFullMarks).
+TEST(GradePlugins, BruteForcePassesTheFifthRoundsChecks) {
+  const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "deep-tree-nest-negative"});
+  ASSERT_EQ(card.checks.size(), 2u);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }
 
 TEST(GradePlugins, SameScorecardTwice) {

@@ -63,12 +63,21 @@ TEST(NamedScene, NestHasItsLevelsAtTheDocumentedScales) {
   EXPECT_GE(farthest, 0.37f * std::ldexp(1.0f, 36));
   EXPECT_LE(farthest, 2.7f * std::ldexp(1.0f, 36));
   EXPECT_EQ(load_named_scene("procedural:nest:1:1").geometry.triangle_count(), 4u);
+  // One cone, around (-1, -1, -1): half the triangles, every vertex in the negative octant.
+  const Scene one = load_named_scene("procedural:nest:49:1:-1:-1:-1");
+  EXPECT_EQ(one.geometry.triangle_count(), expected + 3);
+  for (const glm::vec3& p : one.geometry.meshes[0].positions) {
+    EXPECT_LT(p.x, 0.0f);
+    EXPECT_LT(p.y, 0.0f);
+    EXPECT_LT(p.z, 0.0f);
+  }
 }
 
 TEST(NamedScene, BadNamesAreInputErrorsNamingTheScene) {
   for (const char* bad : {"procedural:nothing", "procedural:soup:10", "procedural:soup:-3:1", "procedural:grid:2:x",
                           "procedural:sphere-mesh:12", "procedural:box:3:1", "procedural:empty:1",
                           "procedural:sphere-mesh:1:0:0:0:-1", "procedural:nest:50:1", "procedural:nest:0:1",
+                          "procedural:nest:49:1:0:1:1", "procedural:nest:49:1:-1:-1", "procedural:nest:49:1:1:2:1",
                           "no/such/scene.json"}) {
     try {
       load_named_scene(bad);
