@@ -424,6 +424,36 @@ TEST(GradePlugins, BruteForcePassesTheFifthRoundsChecks) {
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }
 
+// A tree built lazily by the first query, without a lock (scotty bug 54), races only while the first calls
+// into a fresh instance run at once: the thread-safety check's first round is concurrent, before the
+// single-threaded answers it is compared with. On 20,000 triangles (a build of tens of milliseconds) the
+// threads released together always meet inside it. The correct BVH and the brute-force plugin pass.
+TEST(GradePlugins, LazyBuildRacesInTheFirstConcurrentRound) {
+  const std::filesystem::path suite = scratch_suite("lazy-build", R"({"suite": "lazy-build",
+    "defaults": {"time_limit": 20, "memory_limit_mib": 1024, "seed": 3},
+    "scenes": {"soup": "procedural:soup:20000:7", "small": "procedural:soup:500:7"},
+    "checks": [
+      {"name": "threads", "category": "thread-safety", "scene": "soup", "count": 4096, "threads": 8, "repeat": 2,
+       "min_seconds": 0, "points": 1},
+      {"name": "threads-small", "category": "thread-safety", "scene": "small", "count": 512, "threads": 8,
+       "repeat": 2, "min_seconds": 0, "points": 1}]})");
+  const auto one = [&](const std::filesystem::path& plugin, const std::string& check) {
+    GradeSettings s;
+    s.plugin = plugin;
+    s.suite = suite.string();
+    s.only = {check};
+    s.twinray = TWINRAY_BINARY;
+    return check_named(run_grade(s), check);
+  };
+  const CheckResult lazy = one(scotty_plugin("lazy-build"), "threads");
+  EXPECT_NE(lazy.outcome, Outcome::Pass) << terminal_check_line(lazy);
+  EXPECT_EQ(lazy.points, 0.0);
+  EXPECT_NE(lazy.reproduce.find("--check threads"), std::string::npos) << lazy.reproduce;
+  EXPECT_EQ(one(scotty_plugin(), "threads").outcome, Outcome::Pass);
+  EXPECT_EQ(one(TWINRAY_TEST_BRUTE_PLUGIN, "threads-small").outcome, Outcome::Pass);
+  std::filesystem::remove_all(suite);
+}
+
 TEST(GradePlugins, SameScorecardTwice) {
   const std::vector<std::string> checks = {"closest-soup", "ray-interval-soup", "axis-aligned-box", "watertight-ball"};
   const Scorecard a = grade(scotty_plugin("lost-primitive"), checks), b = grade(scotty_plugin("lost-primitive"), checks);

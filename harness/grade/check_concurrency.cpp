@@ -1,7 +1,9 @@
-// thread-safety: the same rays answered by one thread and then by many threads at once on the same instance
-// (each thread all rays, starting at a different place), repeated; every concurrent answer must be
-// bit-identical to the single-threaded one. A plugin that keeps traversal state in the instance (a shared
-// stack, a "current ray" member) gives different answers, or crashes, under contention.
+// thread-safety: the same rays answered by many threads at once on the same instance (each thread all rays,
+// starting at a different place) and by one thread, repeated; every concurrent answer must be bit-identical
+// to the single-threaded one. A plugin that keeps traversal state in the instance (a shared stack, a "current
+// ray" member) gives different answers, or crashes, under contention. The first calls into the fresh instance
+// are a concurrent round: a plugin that finishes its work lazily on first use (the tree built by the first
+// query, without a lock) races only there.
 //
 // determinism: two builds of the same scene (two fresh instances) and a repeated query on one instance give
 // bit-identical answers. A builder that depends on addresses, time or uninitialised memory does not.
@@ -63,28 +65,10 @@ void trace_rotated(const Backend& backend, std::span<const Ray> rays, std::size_
 CheckVerdict run_thread_safety_check(CheckContext& ctx) {
   const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Diffuse}, ctx.count_or(kDefaultRays));
   PluginInstance plugin = ctx.built_plugin();
-  Answers single;
-  trace_rotated(*plugin, rays, 0, single);
-
   const auto threads = static_cast<std::size_t>(ctx.spec.threads);
   const std::size_t chunks = (rays.size() + kChunk - 1) / kChunk;
-  std::size_t differing = 0, compared = 0;
-  std::string first;
-  std::optional<std::size_t> first_ray;
-  // At least `repeat` rounds, and more until `min_seconds` of concurrent work are done: a race shows only while
-  // two threads are inside the plugin at once, which on a busy two-core machine can be rare. Never more than
-  // half of the time left before the deadline is spent on extra rounds.
-  const auto started = std::chrono::steady_clock::now();
-  int rounds = 0;
-  const auto more_rounds = [&] {
-    const auto now = std::chrono::steady_clock::now();
-    if (rounds < ctx.spec.repeat) return true;
-    const double elapsed = std::chrono::duration<double>(now - started).count();
-    const double per_round = elapsed / rounds;
-    const double left = std::chrono::duration<double>(ctx.deadline - now).count();
-    return elapsed < ctx.spec.min_seconds && per_round < 0.5 * left;
-  };
-  for (; more_rounds(); ++rounds) {
+  // Every thread's answers to every ray, all threads released together.
+  const auto concurrent_round = [&] {
     std::vector<Answers> results(threads);
     std::vector<std::exception_ptr> failures(threads);
     {
@@ -104,6 +88,30 @@ CheckVerdict run_thread_safety_check(CheckContext& ctx) {
     // A crash of the worker fails every thread's call; the first failure stands for all of them.
     for (const std::exception_ptr& f : failures)
       if (f) std::rethrow_exception(f);
+    return results;
+  };
+  const auto started = std::chrono::steady_clock::now();
+  std::vector<Answers> results = concurrent_round();
+  Answers single;
+  trace_rotated(*plugin, rays, 0, single);
+
+  std::size_t differing = 0, compared = 0;
+  std::string first;
+  std::optional<std::size_t> first_ray;
+  // At least `repeat` rounds, and more until `min_seconds` of concurrent work are done: a race shows only while
+  // two threads are inside the plugin at once, which on a busy two-core machine can be rare. Never more than
+  // half of the time left before the deadline is spent on extra rounds.
+  int rounds = 0;
+  const auto more_rounds = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    if (rounds < ctx.spec.repeat) return true;
+    const double elapsed = std::chrono::duration<double>(now - started).count();
+    const double per_round = elapsed / rounds;
+    const double left = std::chrono::duration<double>(ctx.deadline - now).count();
+    return elapsed < ctx.spec.min_seconds && per_round < 0.5 * left;
+  };
+  for (; rounds == 0 || more_rounds(); ++rounds) {
+    if (rounds > 0) results = concurrent_round();  // the first round ran before the single-threaded answers
     for (std::size_t t = 0; t < threads; ++t) {
       const Difference d = differences(single, results[t]);
       differing += d.count;

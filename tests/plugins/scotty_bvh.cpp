@@ -94,6 +94,9 @@
 //  52 STACK_64          bug 20 with 64 entries
 //  53 ANYHIT_FIXED_ORDER_32  any-hit pushes the left child, then the right (popped first), on a stack of 32
 //                       entries that drops what does not fit
+//  54 LAZY_BUILD        build() keeps the primitives and the first query builds the tree, unlocked: queries
+//                       that start together build it together (build_stats, called right after build,
+//                       reports the tree not built yet)
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -493,6 +496,19 @@ class BVH {
  public:
   void build(std::vector<Primitive>&& prims) {
     primitives_ = std::move(prims);
+#if BUG(54)
+    built_ = false;  // built on first use: "a scene that is never traced costs nothing"
+  }
+
+  // The tree, built by the first query that needs it (no lock: "it happens once").
+  void ensure_built() const {
+    if (built_) return;
+    const_cast<BVH*>(this)->build_tree();
+    built_ = true;
+  }
+
+  void build_tree() {
+#endif
     nodes_.clear();
     depth_ = 0;
     if (primitives_.empty()) return;
@@ -503,6 +519,9 @@ class BVH {
 
   // Closest hit; counts nodes whose box was tested and primitives tested.
   Trace hit(const Ray& ray, twinray_query_stats& stats) const {
+#if BUG(54)
+    ensure_built();
+#endif
     Trace closest;
     if (nodes_.empty()) return closest;
 #if BUG(24)
@@ -622,6 +641,9 @@ class BVH {
   }
 
   bool any_hit(const Ray& ray, twinray_query_stats& stats) const {
+#if BUG(54)
+    ensure_built();
+#endif
     if (nodes_.empty()) return false;
 #if BUG(9)
     const double tmax = INFINITY;
@@ -879,6 +901,9 @@ class BVH {
   std::size_t depth_ = 0;
 #if BUG(8)
   mutable std::vector<StackEntry> stack_;
+#endif
+#if BUG(54)
+  mutable bool built_ = false;
 #endif
 };
 
