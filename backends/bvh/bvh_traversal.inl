@@ -10,8 +10,9 @@
 // contains no sphere code at all (and vice versa); a mixed scene branches once per leaf.
 //
 // No include guard: bvh_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
-// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
-// child-pair box test of ray_box.h) defined. See bvh_kernels.h.
+// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing), TWINRAY_BOX_PAIR (the
+// child-pair box test of ray_box.h) and TWINRAY_BOX_PAIR_RAY (the ray type that test reads) defined. See
+// bvh_kernels.h.
 
 // Told about every node a query enters, in order, with the end of the interval still searched (the closest
 // hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
@@ -22,8 +23,10 @@ struct NoVisitObserver {
 
 namespace bvh_detail {
 
+// Nodes are handled by address rather than index in the loop and on the stack: the next node's address is one
+// addition from the current one's, where an index costs a shift per use.
 struct StackEntry {
-  std::uint32_t node;
+  const BvhNode* node;
   float entry;  // where the ray enters the node's box
 };
 
@@ -34,7 +37,7 @@ TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
 
 
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
-TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
+TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, const BvhNode*& node) {
   while (size > 0) {
     const StackEntry& e = stack[--size];
     if (e.entry <= tmax) {
@@ -46,13 +49,14 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
 }
 
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
-TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
-                    float tmax, StackEntry* stack, std::size_t& size, std::uint32_t& next) {
-  const std::uint32_t left = index + 1;
-  const std::uint32_t right = nodes[index].second_child();
+TWINRAY_KERNEL inline bool descend(const BvhNode* nodes, const BvhNode& node, const TWINRAY_BOX_PAIR_RAY& pair_ray,
+                                   StackEntry* stack, std::size_t& size, const BvhNode*& next) {
+  const BvhNode* left = &node + 1;
+  const BvhNode* right = nodes + node.second_child();
   float entry_left = 0.0f, entry_right = 0.0f;
-  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
-  const bool hit_left = (hits & 1u) != 0, hit_right = (hits & 2u) != 0;
+  const unsigned hits = TWINRAY_BOX_PAIR(*left, *right, pair_ray, entry_left, entry_right);
+  const bool hit_left = (hits & TWINRAY_BOX_PAIR_RAY::kFirstHit) != 0;
+  const bool hit_right = (hits & TWINRAY_BOX_PAIR_RAY::kSecondHit) != 0;
   if (hit_left && hit_right) {
     const bool left_first = entry_left <= entry_right;
     stack[size++] = left_first ? StackEntry{right, entry_right} : StackEntry{left, entry_left};
@@ -92,17 +96,22 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   [[maybe_unused]] bool best_crossing_kept = false;
 
   float root_entry = 0.0f;
-  std::uint32_t index = 0;
+  const BvhNode* const nodes = bvh.nodes.data();
+  const BvhNode* current = nodes;
   const float box_tmin = cull_min(ray.tmin);
   float box_tmax = cull_max(tmax);  // follows tmax
-  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  // The root's box is tested only when an observer is told which nodes the query enters. Otherwise the
+  // traversal starts inside the root: its children's boxes are tested anyway (a leaf root's primitives are
+  // tested directly), so skipping it changes no answer, and saves a box test on every ray that hits the scene.
+  bool more = std::is_same_v<Observer, NoVisitObserver> ||
+              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);  // follows box_tmax
   while (more) {
-    observer.enter(index, tmax);
-    const BvhNode& node = bvh.nodes[index];
+    observer.enter(static_cast<std::uint32_t>(current - nodes), tmax);
+    const BvhNode& node = *current;
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
-             pop_next(stack, size, box_tmax, index);
+      more = descend(nodes, node, pair_ray, stack, size, current) || pop_next(stack, size, box_tmax, current);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -141,7 +150,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         best_index = i;
       }
     }
-    more = pop_next(stack, size, box_tmax, index);
+    // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
+    // the AVX broadcast could not be inlined there. One broadcast per leaf.
+    pair_ray.set_tmax(box_tmax);
+    more = pop_next(stack, size, box_tmax, current);
   }
 
   if (stats) {
@@ -176,16 +188,19 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
   bool found = false;
 
   float root_entry = 0.0f;
-  std::uint32_t index = 0;
+  const BvhNode* const nodes = bvh.nodes.data();
+  const BvhNode* current = nodes;
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
-  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  // As in the closest-hit query: the root's box only when an observer is told about it.
+  bool more = std::is_same_v<Observer, NoVisitObserver> ||
+              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  const TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);
   while (more && !found) {
-    observer.enter(index, ray.tmax);
-    const BvhNode& node = bvh.nodes[index];
+    observer.enter(static_cast<std::uint32_t>(current - nodes), ray.tmax);
+    const BvhNode& node = *current;
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
-             pop_next(stack, size, box_tmax, index);
+      more = descend(nodes, node, pair_ray, stack, size, current) || pop_next(stack, size, box_tmax, current);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -204,7 +219,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
         found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
       }
     }
-    more = pop_next(stack, size, box_tmax, index);
+    more = pop_next(stack, size, box_tmax, current);
   }
 
   if (stats) {
