@@ -23,10 +23,8 @@ struct NoVisitObserver {
 
 namespace bvh_detail {
 
-// Nodes are handled by address rather than index in the loop and on the stack: the next node's address is one
-// addition from the current one's, where an index costs a shift per use.
 struct StackEntry {
-  const BvhNode* node;
+  std::uint32_t node;
   float entry;  // where the ray enters the node's box
 };
 
@@ -37,7 +35,7 @@ TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
 
 
 // Pops the next node worth visiting (entry <= tmax). False when the stack is exhausted.
-TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, const BvhNode*& node) {
+TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& node) {
   while (size > 0) {
     const StackEntry& e = stack[--size];
     if (e.entry <= tmax) {
@@ -49,12 +47,13 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
 }
 
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
-TWINRAY_KERNEL inline bool descend(const BvhNode* nodes, const BvhNode& node, const TWINRAY_BOX_PAIR_RAY& pair_ray,
-                                   StackEntry* stack, std::size_t& size, const BvhNode*& next) {
-  const BvhNode* left = &node + 1;
-  const BvhNode* right = nodes + node.second_child();
+TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index,
+                                   const TWINRAY_BOX_PAIR_RAY& pair_ray, StackEntry* stack, std::size_t& size,
+                                   std::uint32_t& next) {
+  const std::uint32_t left = index + 1;
+  const std::uint32_t right = nodes[index].second_child();
   float entry_left = 0.0f, entry_right = 0.0f;
-  const unsigned hits = TWINRAY_BOX_PAIR(*left, *right, pair_ray, entry_left, entry_right);
+  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], pair_ray, entry_left, entry_right);
   const bool hit_left = (hits & TWINRAY_BOX_PAIR_RAY::kFirstHit) != 0;
   const bool hit_right = (hits & TWINRAY_BOX_PAIR_RAY::kSecondHit) != 0;
   if (hit_left && hit_right) {
@@ -96,8 +95,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   [[maybe_unused]] bool best_crossing_kept = false;
 
   float root_entry = 0.0f;
-  const BvhNode* const nodes = bvh.nodes.data();
-  const BvhNode* current = nodes;
+  std::uint32_t index = 0;
   const float box_tmin = cull_min(ray.tmin);
   float box_tmax = cull_max(tmax);  // follows tmax
   // The root's box is tested only when an observer is told which nodes the query enters. Otherwise the
@@ -107,11 +105,11 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
               intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);  // follows box_tmax
   while (more) {
-    observer.enter(static_cast<std::uint32_t>(current - nodes), tmax);
-    const BvhNode& node = *current;
+    observer.enter(index, tmax);
+    const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(nodes, node, pair_ray, stack, size, current) || pop_next(stack, size, box_tmax, current);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -153,7 +151,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
     // the AVX broadcast could not be inlined there. One broadcast per leaf.
     pair_ray.set_tmax(box_tmax);
-    more = pop_next(stack, size, box_tmax, current);
+    more = pop_next(stack, size, box_tmax, index);
   }
 
   if (stats) {
@@ -188,19 +186,18 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
   bool found = false;
 
   float root_entry = 0.0f;
-  const BvhNode* const nodes = bvh.nodes.data();
-  const BvhNode* current = nodes;
+  std::uint32_t index = 0;
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
   // As in the closest-hit query: the root's box only when an observer is told about it.
   bool more = std::is_same_v<Observer, NoVisitObserver> ||
               intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
   const TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);
   while (more && !found) {
-    observer.enter(static_cast<std::uint32_t>(current - nodes), ray.tmax);
-    const BvhNode& node = *current;
+    observer.enter(index, ray.tmax);
+    const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(nodes, node, pair_ray, stack, size, current) || pop_next(stack, size, box_tmax, current);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -219,7 +216,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
         found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
       }
     }
-    more = pop_next(stack, size, box_tmax, current);
+    more = pop_next(stack, size, box_tmax, index);
   }
 
   if (stats) {
