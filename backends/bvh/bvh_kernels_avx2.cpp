@@ -11,13 +11,16 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 namespace twinray::bvh_avx2 {
 
 #define TWINRAY_KERNEL TWINRAY_TARGET_AVX2
 #define TWINRAY_BOX_PAIR intersect_box_pair_avx2
+#define TWINRAY_BOX_PAIR_RAY BoxPairRayAvx2
 #include "backends/bvh/bvh_traversal.inl"
 #undef TWINRAY_BOX_PAIR
+#undef TWINRAY_BOX_PAIR_RAY
 #undef TWINRAY_KERNEL
 
 BvhKernels kernels(bool triangles, bool spheres) {

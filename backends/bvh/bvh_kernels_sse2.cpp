@@ -11,13 +11,16 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 
 namespace twinray::bvh_sse2 {
 
 #define TWINRAY_KERNEL 
 #define TWINRAY_BOX_PAIR intersect_box_pair_sse2
+#define TWINRAY_BOX_PAIR_RAY BoxPairRaySse2
 #include "backends/bvh/bvh_traversal.inl"
 #undef TWINRAY_BOX_PAIR
+#undef TWINRAY_BOX_PAIR_RAY
 #undef TWINRAY_KERNEL
 
 BvhKernels kernels(bool triangles, bool spheres) {

@@ -10,8 +10,9 @@
 // contains no sphere code at all (and vice versa); a mixed scene branches once per leaf.
 //
 // No include guard: bvh_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
-// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing) and TWINRAY_BOX_PAIR (the
-// child-pair box test of ray_box.h) defined. See bvh_kernels.h.
+// headers it needs, with TWINRAY_KERNEL (the target attribute, or nothing), TWINRAY_BOX_PAIR (the
+// child-pair box test of ray_box.h) and TWINRAY_BOX_PAIR_RAY (the ray type that test reads) defined. See
+// bvh_kernels.h.
 
 // Told about every node a query enters, in order, with the end of the interval still searched (the closest
 // hit's t so far). `twinray trace` passes one to print the visit order; the default does nothing and
@@ -46,13 +47,15 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
 }
 
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
-TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index, const BoxRay& box_ray, float tmin,
-                    float tmax, StackEntry* stack, std::size_t& size, std::uint32_t& next) {
+TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index,
+                                   const TWINRAY_BOX_PAIR_RAY& pair_ray, StackEntry* stack, std::size_t& size,
+                                   std::uint32_t& next) {
   const std::uint32_t left = index + 1;
   const std::uint32_t right = nodes[index].second_child();
   float entry_left = 0.0f, entry_right = 0.0f;
-  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], box_ray, tmin, tmax, entry_left, entry_right);
-  const bool hit_left = (hits & 1u) != 0, hit_right = (hits & 2u) != 0;
+  const unsigned hits = TWINRAY_BOX_PAIR(nodes[left], nodes[right], pair_ray, entry_left, entry_right);
+  const bool hit_left = (hits & TWINRAY_BOX_PAIR_RAY::kFirstHit) != 0;
+  const bool hit_right = (hits & TWINRAY_BOX_PAIR_RAY::kSecondHit) != 0;
   if (hit_left && hit_right) {
     const bool left_first = entry_left <= entry_right;
     stack[size++] = left_first ? StackEntry{right, entry_right} : StackEntry{left, entry_left};
@@ -95,14 +98,18 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   std::uint32_t index = 0;
   const float box_tmin = cull_min(ray.tmin);
   float box_tmax = cull_max(tmax);  // follows tmax
-  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  // The root's box is tested only when an observer is told which nodes the query enters. Otherwise the
+  // traversal starts inside the root: its children's boxes are tested anyway (a leaf root's primitives are
+  // tested directly), so skipping it changes no answer, and saves a box test on every ray that hits the scene.
+  bool more = std::is_same_v<Observer, NoVisitObserver> ||
+              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);  // follows box_tmax
   while (more) {
     observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
-             pop_next(stack, size, box_tmax, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -141,6 +148,9 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         best_index = i;
       }
     }
+    // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
+    // the AVX broadcast could not be inlined there. One broadcast per leaf.
+    pair_ray.set_tmax(box_tmax);
     more = pop_next(stack, size, box_tmax, index);
   }
 
@@ -178,14 +188,16 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
   float root_entry = 0.0f;
   std::uint32_t index = 0;
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
-  bool more = intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  // As in the closest-hit query: the root's box only when an observer is told about it.
+  bool more = std::is_same_v<Observer, NoVisitObserver> ||
+              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
+  const TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);
   while (more && !found) {
     observer.enter(index, ray.tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, box_ray, box_tmin, box_tmax, stack, size, index) ||
-             pop_next(stack, size, box_tmax, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();

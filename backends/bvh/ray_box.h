@@ -39,20 +39,31 @@ inline constexpr float kSlabFarScale = static_cast<float>(1.0 + 2.0 * (3.0 * 0x1
                                        (1.0f + 0x1p-23f);
 
 struct BoxRay {
-  __m128 org;       // (x, y, z, 0)
-  __m128 inv_dir;   // (1/x, 1/y, 1/z, NaN); 1/(+-0) = +-inf
-  __m128 negative;  // all-ones lanes where the direction's sign bit is set (-0 included): near plane = hi
+  __m128 org;          // (x, y, z, 0)
+  __m128 inv_dir;      // (1/x, 1/y, 1/z, NaN); 1/(+-0) = +-inf
+  __m128 inv_dir_far;  // inv_dir * kSlabFarScale, for the far planes (see below)
+  __m128 negative;     // all-ones lanes where the direction's sign bit is set (-0 included): near plane = hi
 
   BoxRay() = default;
+  // Four lanes at once: one division for the three reciprocals (correctly rounded like three scalar ones),
+  // the sign masks by an arithmetic shift of the reciprocals' sign bits. Lane 3 divides 1 by a NaN, so it is
+  // a (positive) NaN, and its mask is 0. Ray is (org, tmin, dir, tmax), so lane 3 of each load is masked.
   explicit BoxRay(const Ray& ray) {
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    const float ix = 1.0f / ray.dir.x, iy = 1.0f / ray.dir.y, iz = 1.0f / ray.dir.z;
-    org = _mm_setr_ps(ray.org.x, ray.org.y, ray.org.z, 0.0f);
-    inv_dir = _mm_setr_ps(ix, iy, iz, nan);
-    const auto mask = [](float v) { return std::signbit(v) ? -1 : 0; };
-    negative = _mm_castsi128_ps(_mm_setr_epi32(mask(ix), mask(iy), mask(iz), 0));
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    const __m128 nan_w = _mm_castsi128_ps(_mm_setr_epi32(0, 0, 0, 0x7fc00000));
+    org = _mm_and_ps(_mm_loadu_ps(&ray.org.x), xyz);
+    inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), _mm_or_ps(_mm_and_ps(_mm_loadu_ps(&ray.dir.x), xyz), nan_w));
+    inv_dir_far = _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale));
+    negative = _mm_castsi128_ps(_mm_srai_epi32(_mm_castps_si128(inv_dir), 31));
   }
 };
+
+// The far distance is (plane - org) * (inv_dir * kSlabFarScale), the scaled reciprocal rounded once per ray,
+// rather than ((plane - org) * inv_dir) * kSlabFarScale: both are the exact distance times the scale times
+// four rounding factors (1 + d_i), |d_i| <= 2^-24 (the difference, the reciprocal, the product and the
+// product with the scale, in either order), which is all Ize's bound counts, so the scale covers the same
+// error (as in the wide kernels, backends/wide/wide_kernels_sse2.cpp); an infinite reciprocal stays
+// infinite. One product less per box.
 
 // True when the ray overlaps the node's box within [tmin, tmax] (closed); `entry` is where it enters.
 [[gnu::always_inline]] inline bool intersect_box(const BvhNode& node, const BoxRay& r, float tmin, float tmax, float& entry) {
@@ -62,8 +73,7 @@ struct BoxRay {
   const __m128 near_plane = _mm_or_ps(_mm_and_ps(r.negative, hi), _mm_andnot_ps(r.negative, lo));
   const __m128 far_plane = _mm_or_ps(_mm_and_ps(r.negative, lo), _mm_andnot_ps(r.negative, hi));
   const __m128 t_near = _mm_mul_ps(_mm_sub_ps(near_plane, r.org), r.inv_dir);
-  const __m128 t_far =
-      _mm_mul_ps(_mm_mul_ps(_mm_sub_ps(far_plane, r.org), r.inv_dir), _mm_set1_ps(kSlabFarScale));
+  const __m128 t_far = _mm_mul_ps(_mm_sub_ps(far_plane, r.org), r.inv_dir_far);
   // Operand order matters: the NaN-free bound is the second operand (see above).
   __m128 t0 = _mm_max_ps(t_near, _mm_set1_ps(tmin));
   __m128 t1 = _mm_min_ps(t_far, _mm_set1_ps(tmax));
@@ -76,30 +86,58 @@ struct BoxRay {
   return entry <= _mm_cvtss_f32(t1);
 }
 
-// Both children of an interior node: two single tests. Returns a bit mask: 1 when a is hit, 2 when b is hit.
-[[gnu::always_inline]] inline unsigned intersect_box_pair_sse2(const BvhNode& a, const BvhNode& b, const BoxRay& r,
-                                                               float tmin, float tmax, float& entry_a, float& entry_b) {
-  return (intersect_box(a, r, tmin, tmax, entry_a) ? 1u : 0u) | (intersect_box(b, r, tmin, tmax, entry_b) ? 2u : 0u);
+// The ray of a child-pair test, with the interval the boxes are tested against. Built once per query; the
+// traversal calls set_tmax when the closest hit so far moves the end of the interval.
+struct BoxPairRaySse2 {
+  static constexpr unsigned kFirstHit = 1u, kSecondHit = 2u;  // the bits of intersect_box_pair_sse2's result
+  BoxRay ray;
+  float tmin, tmax;
+  BoxPairRaySse2(const BoxRay& r, float t0, float t1) : ray(r), tmin(t0), tmax(t1) {}
+  void set_tmax(float t) { tmax = t; }
+};
+
+// Both children of an interior node: two single tests. Returns a bit mask: kFirstHit when a is hit,
+// kSecondHit when b is hit.
+[[gnu::always_inline]] inline unsigned intersect_box_pair_sse2(const BvhNode& a, const BvhNode& b,
+                                                               const BoxPairRaySse2& r, float& entry_a,
+                                                               float& entry_b) {
+  return (intersect_box(a, r.ray, r.tmin, r.tmax, entry_a) ? 1u : 0u) |
+         (intersect_box(b, r.ray, r.tmin, r.tmax, entry_b) ? 2u : 0u);
 }
 
+// The same for the AVX test: the ray's vectors in both 128-bit halves and the interval in all eight lanes,
+// broadcast once per query rather than once per node (the compiler does not keep them in registers across
+// the traversal loop), so the node test reads them as memory operands.
+struct BoxPairRayAvx2 {
+  // The bits of intersect_box_pair_avx2's result: the sign bits of lane 0 of each half, as movemask gives
+  // them (no instructions to move them to bits 0 and 1).
+  static constexpr unsigned kFirstHit = 1u, kSecondHit = 16u;
+  __m256 org, inv_dir, inv_dir_far, negative, tmin, tmax;
+  [[gnu::always_inline]] TWINRAY_TARGET_AVX2 BoxPairRayAvx2(const BoxRay& r, float t0, float t1)
+      : org(_mm256_set_m128(r.org, r.org)),
+        inv_dir(_mm256_set_m128(r.inv_dir, r.inv_dir)),
+        inv_dir_far(_mm256_set_m128(r.inv_dir_far, r.inv_dir_far)),
+        negative(_mm256_set_m128(r.negative, r.negative)),
+        tmin(_mm256_set1_ps(t0)),
+        tmax(_mm256_set1_ps(t1)) {}
+  [[gnu::always_inline]] TWINRAY_TARGET_AVX2 void set_tmax(float t) { tmax = _mm256_set1_ps(t); }
+};
+
 // Both children at once: the test above, lane for lane, on the two boxes side by side in one AVX register
-// (low half: a, high half: b), so the entries are bit-identical to two single tests. The broadcasts of the
-// ray's vectors are loop invariants the compiler hoists out of the traversal loop.
+// (low half: a, high half: b), so the entries are bit-identical to two single tests. Returns kFirstHit and
+// kSecondHit of BoxPairRayAvx2.
 [[gnu::always_inline]] TWINRAY_TARGET_AVX2 inline unsigned intersect_box_pair_avx2(const BvhNode& a, const BvhNode& b,
-                                                                                  const BoxRay& r, float tmin, float tmax,
+                                                                                  const BoxPairRayAvx2& r,
                                                                                   float& entry_a, float& entry_b) {
-  const __m256 org = _mm256_set_m128(r.org, r.org);
-  const __m256 inv_dir = _mm256_set_m128(r.inv_dir, r.inv_dir);
-  const __m256 negative = _mm256_set_m128(r.negative, r.negative);
   const __m256 lo = _mm256_set_m128(_mm_load_ps(&b.lo.x), _mm_load_ps(&a.lo.x));
   const __m256 hi = _mm256_set_m128(_mm_load_ps(&b.hi.x), _mm_load_ps(&a.hi.x));
-  const __m256 near_plane = _mm256_blendv_ps(lo, hi, negative);
-  const __m256 far_plane = _mm256_blendv_ps(hi, lo, negative);
-  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, org), inv_dir);
-  const __m256 t_far = _mm256_mul_ps(_mm256_mul_ps(_mm256_sub_ps(far_plane, org), inv_dir), _mm256_set1_ps(kSlabFarScale));
+  const __m256 near_plane = _mm256_blendv_ps(lo, hi, r.negative);
+  const __m256 far_plane = _mm256_blendv_ps(hi, lo, r.negative);
+  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, r.org), r.inv_dir);
+  const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(far_plane, r.org), r.inv_dir_far);
   // Operand order matters: the NaN-free bound is the second operand (see above).
-  __m256 t0 = _mm256_max_ps(t_near, _mm256_set1_ps(tmin));
-  __m256 t1 = _mm256_min_ps(t_far, _mm256_set1_ps(tmax));
+  __m256 t0 = _mm256_max_ps(t_near, r.tmin);
+  __m256 t1 = _mm256_min_ps(t_far, r.tmax);
   // Horizontal max / min within each 128-bit half.
   t0 = _mm256_max_ps(t0, _mm256_permute_ps(t0, _MM_SHUFFLE(1, 0, 3, 2)));
   t0 = _mm256_max_ps(t0, _mm256_permute_ps(t0, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -108,7 +146,7 @@ struct BoxRay {
   entry_a = _mm256_cvtss_f32(t0);
   entry_b = _mm_cvtss_f32(_mm256_extractf128_ps(t0, 1));
   const unsigned hit = static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ)));
-  return (hit & 1u) | ((hit >> 3) & 2u);
+  return hit & (BoxPairRayAvx2::kFirstHit | BoxPairRayAvx2::kSecondHit);
 }
 
 }  // namespace twinray

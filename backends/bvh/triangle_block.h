@@ -57,7 +57,7 @@ struct EdgeLanes {
 };
 
 [[gnu::always_inline]] inline EdgeLanes edge_test(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes) {
-  const auto row = [&](int vert, int axis) { return _mm_load_ps(block.v[vert][axis]); };
+  const auto row = [&](int vert, std::ptrdiff_t axis) { return _mm_load_ps(block.v[vert][axis]); };
   const __m128 ox = _mm_set1_ps(ray.ox), oy = _mm_set1_ps(ray.oy), oz = _mm_set1_ps(ray.oz);
   const __m128 sx = _mm_set1_ps(ray.sx), sy = _mm_set1_ps(ray.sy);
 

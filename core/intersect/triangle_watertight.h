@@ -50,13 +50,16 @@
 #include <glm/vec3.hpp>
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace twinray {
 
 // Everything about the ray the triangle test needs, computed once per ray.
 struct TriangleRay {
-  int kx = 0, ky = 1, kz = 2;  // permutation: kz = axis of the largest |dir| component (woop_axes.h)
+  // The permutation: kz = axis of the largest |dir| component (woop_axes.h). Pointer-sized, so that indexing
+  // with them needs no sign extension (once per triangle block in the bvh kernels).
+  std::ptrdiff_t kx = 0, ky = 1, kz = 2;
   float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
   float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
   refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
@@ -68,12 +71,16 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   r.kx = axes.kx;
   r.ky = axes.ky;
   r.kz = axes.kz;
-  r.sx = dir[r.kx] / dir[r.kz];
-  r.sy = dir[r.ky] / dir[r.kz];
-  r.sz = 1.0f / dir[r.kz];
-  r.ox = org[r.kx];
-  r.oy = org[r.ky];
-  r.oz = org[r.kz];
+  // value_ptr views a vector as float[3], so a permuted component is one indexed load; glm's operator[] is a
+  // chain of compares per access.
+  const float* d = glm::value_ptr(dir);
+  const float* o = glm::value_ptr(org);
+  r.sx = d[r.kx] / d[r.kz];
+  r.sy = d[r.ky] / d[r.kz];
+  r.sz = 1.0f / d[r.kz];
+  r.ox = o[r.kx];
+  r.oy = o[r.ky];
+  r.oz = o[r.kz];
   refine_detail::set_ray(r.refine, org, dir);
   return r;
 }
