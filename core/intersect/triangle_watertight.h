@@ -58,7 +58,7 @@ namespace twinray {
 struct TriangleRay {
   int kx = 0, ky = 1, kz = 2;  // permutation: kz = axis of the largest |dir| component (woop_axes.h)
   float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
-  float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
+  float sx = 0.0f, sy = 0.0f;  // shear: (dir[kx], dir[ky]) -> 0 (t comes from triangle_refine.h, so no z scale)
   refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
 };
 
@@ -68,12 +68,14 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   r.kx = axes.kx;
   r.ky = axes.ky;
   r.kz = axes.kz;
-  r.sx = dir[r.kx] / dir[r.kz];
-  r.sy = dir[r.ky] / dir[r.kz];
-  r.sz = 1.0f / dir[r.kz];
-  r.ox = org[r.kx];
-  r.oy = org[r.ky];
-  r.oz = org[r.kz];
+  // Indexed through value_ptr: glm's operator[] is a switch per access, and this runs once per query.
+  const float* d = glm::value_ptr(dir);
+  const float* o = glm::value_ptr(org);
+  r.sx = d[r.kx] / d[r.kz];
+  r.sy = d[r.ky] / d[r.kz];
+  r.ox = o[r.kx];
+  r.oy = o[r.ky];
+  r.oz = o[r.kz];
   refine_detail::set_ray(r.refine, org, dir);
   return r;
 }
