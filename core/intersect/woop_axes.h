@@ -8,6 +8,8 @@
 
 #include <glm/gtc/type_ptr.hpp>
 
+#include <cmath>
+
 namespace twinray {
 
 struct WoopAxes {
@@ -15,20 +17,21 @@ struct WoopAxes {
 };
 
 // Vec is glm::vec3 or glm::dvec3 (a float converted to double compares the same way). Written without a
-// branch on the axis: every query of every backend runs it once (glm's operator[] would be a switch).
+// branch: every query of every backend runs it once. The three comparisons index a table of kz (the same
+// comparisons as "ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2", NaN included), and kz with the sign of
+// dir[kz] one of kx, ky (glm's operator[] would be a switch).
 template <class Vec>
 [[gnu::always_inline]] inline WoopAxes woop_axes(const Vec& dir) {
-  const auto ax = dir.x < 0 ? -dir.x : dir.x;
-  const auto ay = dir.y < 0 ? -dir.y : dir.y;
-  const auto az = dir.z < 0 ? -dir.z : dir.z;
-  const int kz = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-  const int a = kz == 2 ? 0 : kz + 1;  // the axes after kz, cyclically
-  const int b = a == 2 ? 0 : a + 1;
-  const bool negative = glm::value_ptr(dir)[kz] < 0;
+  static constexpr int kLargest[8] = {2, 2, 2, 0, 1, 1, 1, 0};  // by (ax >= ay) | (ax >= az) << 1 | (ay >= az) << 2
+  static constexpr int kAfter[3][2] = {{1, 2}, {2, 0}, {0, 1}};  // the two axes after kz, cyclically
+  // |x| (one mask operation); -0 and +0 compare alike, so the table sees the same comparisons either way.
+  const auto ax = std::fabs(dir.x), ay = std::fabs(dir.y), az = std::fabs(dir.z);
+  const int kz = kLargest[int{ax >= ay} | int{ax >= az} << 1 | int{ay >= az} << 2];
+  const int negative = int{glm::value_ptr(dir)[kz] < 0};
   WoopAxes w;
   w.kz = kz;
-  w.kx = negative ? b : a;
-  w.ky = negative ? a : b;
+  w.kx = kAfter[kz][negative];
+  w.ky = kAfter[kz][1 - negative];
   return w;
 }
 
