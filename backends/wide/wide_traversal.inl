@@ -83,9 +83,13 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 
 }  // namespace wide_detail
 
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
-  using namespace wide_detail;
+namespace wide_detail {
+
+// Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
+// run the copy without counting, so the bookkeeping costs them nothing.
+template <bool kTriangles, bool kSpheres, bool kStats>
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool intersect_impl(const WideView& bvh, const Ray& ray, Hit& hit,
+                                                                 QueryStats* stats) {
   hit = Hit{};
   const WideBoxRay box_ray(ray);
   [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
@@ -108,7 +112,7 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
   for (;;) {
     if (!WideRef::is_leaf(ref)) {
       const WideNode& node = bvh.nodes[ref];
-      if (stats) boxes_tested += filled_slots(node);
+      if constexpr (kStats) boxes_tested += filled_slots(node);
       const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
       if (mask != 0) {
         if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
@@ -117,7 +121,7 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
       }
     } else {
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
-      prims_tested += count;
+      if constexpr (kStats) prims_tested += count;
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
         const std::uint32_t first_slot = first * kTriangleBlockLanes;
         for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
@@ -156,7 +160,7 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
     if (!pop_next(stack, size, cull_max(tmax), ref)) break;
   }
 
-  if (stats) {
+  if constexpr (kStats) {
     stats->nodes_visited += boxes_tested;
     stats->primitives_tested += prims_tested;
   }
@@ -172,17 +176,15 @@ TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit
   return true;
 }
 
-namespace wide_detail {
-
-// Any hit in one leaf. Counts the primitives it tests.
-template <bool kTriangles, bool kSpheres>
+// Any hit in one leaf. Counts the primitives it tests when kStats.
+template <bool kTriangles, bool kSpheres, bool kStats>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
     for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
       const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
-      prims_tested += in_block;
+      if constexpr (kStats) prims_tested += in_block;
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
       if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
                                        lane_mask(in_block), ray.tmin, ray.tmax) != 0)
@@ -190,7 +192,7 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
     }
   } else if constexpr (kSpheres) {
     for (std::uint32_t i = first; i < first + count; ++i) {
-      ++prims_tested;
+      if constexpr (kStats) ++prims_tested;
       const StoredSphere& s = prims.spheres[i];
       float t;
       if (intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t)) return true;
@@ -205,11 +207,10 @@ TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
   asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
 }
 
-}  // namespace wide_detail
-
-template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
-  using namespace wide_detail;
+// Any hit; kStats as for intersect_impl.
+template <bool kTriangles, bool kSpheres, bool kStats>
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
+                                                                QueryStats* stats) {
   WideBoxRay box_ray(ray);
   const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
@@ -226,7 +227,7 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = bvh.nodes[index];
-    if (stats) boxes_tested += filled_slots(node);
+    if constexpr (kStats) boxes_tested += filled_slots(node);
     // The box test reads the ray's broadcast vectors as memory operands (the load is part of the
     // arithmetic instruction): kept in registers instead, they are live across the leaf test's call,
     // which clobbers every vector register, and GCC spills and reloads all of them at each node with a
@@ -235,7 +236,7 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
     const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
-      if (leaf_occluded<kTriangles, kSpheres>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
+      if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
         break;
       }
@@ -258,11 +259,25 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
     index = stack[--size];
   }
 
-  if (stats) {
+  if constexpr (kStats) {
     stats->nodes_visited += boxes_tested;
     stats->primitives_tested += prims_tested;
   }
   return found;
+}
+
+}  // namespace wide_detail
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  if (stats != nullptr) return wide_detail::intersect_impl<kTriangles, kSpheres, true>(bvh, ray, hit, stats);
+  return wide_detail::intersect_impl<kTriangles, kSpheres, false>(bvh, ray, hit, nullptr);
+}
+
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
+  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true>(bvh, ray, stats);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false>(bvh, ray, nullptr);
 }
 
 // The entry points of this instruction set's kernels (wide_kernels.h).

@@ -61,7 +61,7 @@ struct TriangleRay {
   // with them needs no sign extension (once per triangle block in the bvh kernels).
   std::ptrdiff_t kx = 0, ky = 1, kz = 2;
   float ox = 0.0f, oy = 0.0f, oz = 0.0f;  // origin, permuted: (org[kx], org[ky], org[kz])
-  float sx = 0.0f, sy = 0.0f, sz = 1.0f;  // shear: (dir[kx], dir[ky]) -> 0, dir[kz] -> 1
+  float sx = 0.0f, sy = 0.0f;  // shear: (dir[kx], dir[ky]) -> 0 (t comes from triangle_refine.h, so no z scale)
   refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
 };
 
@@ -77,7 +77,6 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   const float* o = glm::value_ptr(org);
   r.sx = d[r.kx] / d[r.kz];
   r.sy = d[r.ky] / d[r.kz];
-  r.sz = 1.0f / d[r.kz];
   r.ox = o[r.kx];
   r.oy = o[r.ky];
   r.oz = o[r.kz];
