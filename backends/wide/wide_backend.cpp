@@ -73,6 +73,15 @@ bool WideBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
   return kernels_.intersect(WideView{nodes_, &prims_}, ray, hit, stats);
 }
 
+bool WideBackend::intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats) const {
+  if (stats) ++stats->queries;
+  if (kernels_.intersect_ids == nullptr || !is_valid_ray(ray)) {
+    hit = Hit{};
+    return false;
+  }
+  return kernels_.intersect_ids(WideView{nodes_, &prims_}, ray, hit, stats);
+}
+
 bool WideBackend::occluded(const Ray& ray, QueryStats* stats) const {
   if (stats) ++stats->queries;
   if (kernels_.occluded == nullptr || !is_valid_ray(ray)) return false;

@@ -49,6 +49,9 @@ class WideBackend final : public Backend {
   BuildStats build_stats() const override { return stats_; }
 
   bool intersect(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const override;
+  // The same traversal without the winner's u, v and ng (about a fifth of a closest-hit query's work on the
+  // Cornell box): they stay as a miss has them.
+  bool intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const override;
   bool occluded(const Ray& ray, QueryStats* stats = nullptr) const override;
   // Batches are traced in the Morton order of their ray origins (ray_order.h), like the bvh backend's.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const override;

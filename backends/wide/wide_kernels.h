@@ -21,9 +21,11 @@ struct WideView {
   const PrimitiveStore* prims;
 };
 
-// Closest hit (fills `hit` completely or leaves it a miss) and any hit, for a valid ray.
+// Closest hit (fills `hit` completely or leaves it a miss), closest hit with t and ids only (u, v and ng
+// left as a miss has them: Backend::intersect_ids) and any hit, for a valid ray.
 struct WideKernels {
   bool (*intersect)(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
+  bool (*intersect_ids)(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
   bool (*occluded)(const WideView& bvh, const Ray& ray, QueryStats* stats) = nullptr;
 };
 

@@ -86,8 +86,10 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 namespace wide_detail {
 
 // Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
-// run the copy without counting, so the bookkeeping costs them nothing.
-template <bool kTriangles, bool kSpheres, bool kStats>
+// run the copy without counting, so the bookkeeping costs them nothing. kAttributes: whether the winner's u, v
+// and ng are computed (Backend::intersect) or left as a miss has them (Backend::intersect_ids); the traversal,
+// and so t and the ids, is the same either way.
+template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool intersect_impl(const WideView& bvh, const Ray& ray, Hit& hit,
                                                                  QueryStats* stats) {
   hit = Hit{};
@@ -137,8 +139,10 @@ template <bool kTriangles, bool kSpheres, bool kStats>
                 hit.prim_id = key.prim_id;
                 best_is_sphere = false;
                 best_index = slot;
-                best_crossing_kept = crossing != nullptr;
-                if (crossing != nullptr) best_crossing = *crossing;
+                if constexpr (kAttributes) {
+                  best_crossing_kept = crossing != nullptr;
+                  if (crossing != nullptr) best_crossing = *crossing;
+                }
                 return tmax;
               });
         }
@@ -165,6 +169,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     stats->primitives_tested += prims_tested;
   }
   if (!hit.found()) return false;
+  if constexpr (!kAttributes) return true;
   if (kSpheres && best_is_sphere) {
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
@@ -268,10 +273,11 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 
 }  // namespace wide_detail
 
-template <bool kTriangles, bool kSpheres>
+template <bool kTriangles, bool kSpheres, bool kAttributes>
 TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
-  if (stats != nullptr) return wide_detail::intersect_impl<kTriangles, kSpheres, true>(bvh, ray, hit, stats);
-  return wide_detail::intersect_impl<kTriangles, kSpheres, false>(bvh, ray, hit, nullptr);
+  if (stats != nullptr)
+    return wide_detail::intersect_impl<kTriangles, kSpheres, true, kAttributes>(bvh, ray, hit, stats);
+  return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
 template <bool kTriangles, bool kSpheres>
@@ -282,7 +288,9 @@ TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStat
 
 // The entry points of this instruction set's kernels (wide_kernels.h).
 WideKernels kernels(bool triangles, bool spheres) {
-  if (triangles && spheres) return {&wide_intersect<true, true>, &wide_occluded<true, true>};
-  if (spheres) return {&wide_intersect<false, true>, &wide_occluded<false, true>};
-  return {&wide_intersect<true, false>, &wide_occluded<true, false>};
+  if (triangles && spheres)
+    return {&wide_intersect<true, true, true>, &wide_intersect<true, true, false>, &wide_occluded<true, true>};
+  if (spheres)
+    return {&wide_intersect<false, true, true>, &wide_intersect<false, true, false>, &wide_occluded<false, true>};
+  return {&wide_intersect<true, false, true>, &wide_intersect<true, false, false>, &wide_occluded<true, false>};
 }

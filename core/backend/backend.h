@@ -73,6 +73,15 @@ class Backend {
   // Any hit in [ray.tmin, ray.tmax].
   virtual bool occluded(const Ray& ray, QueryStats* stats = nullptr) const = 0;
 
+  // The closest hit's t, geom_id and prim_id only: the same answer as intersect() for those three, while
+  // hit.u, hit.v and hit.ng are unspecified (a backend may fill them or not). For callers that look the
+  // surface up themselves: the renderer reads its own per-triangle table (core/render/triangle_surface.h),
+  // which saves the backend certifying barycentrics and normalising a normal nobody reads. The default
+  // calls intersect(); a backend overrides it when it can skip the attributes.
+  virtual bool intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats = nullptr) const {
+    return intersect(ray, hit, stats);
+  }
+
   // Batches. The defaults loop over the single-ray calls; a backend overrides them when it has a faster
   // path. hits.size() and occluded.size() must equal rays.size().
   virtual void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats = nullptr) const;

@@ -131,6 +131,17 @@ inline glm::vec3 sphere_hit_point(const glm::vec3& org, const glm::vec3& dir, fl
                    static_cast<float>(center.z + r * n.z));
 }
 
+// sphere_hit_point and the normal sphere_hit_attributes gives, from one recomputation of the root: the same
+// bits as the two calls, for the renderer, which needs both and no (u, v).
+inline void sphere_hit_point_and_normal(const glm::vec3& org, const glm::vec3& dir, float t, const glm::vec3& center,
+                                        float radius, glm::vec3& p, glm::vec3& ng) {
+  const sphere_detail::DVec3 n = sphere_detail::hit_direction(org, dir, t, center, radius);
+  const double r = radius;
+  p = glm::vec3(static_cast<float>(center.x + r * n.x), static_cast<float>(center.y + r * n.y),
+                static_cast<float>(center.z + r * n.z));
+  ng = glm::vec3(static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z));
+}
+
 // Unit outward normal and (u,v) = (phi/2pi, theta/pi) (theta from +Y) at parameter t, computed consistently.
 //
 // A float t cannot locate the hit point on a tiny far sphere (one ulp of t = 1e4 is ~1e-3, the size of the

@@ -24,7 +24,7 @@ glm::vec3 DirectIntegrator::radiance(const Ray& camera_ray, Sampler& sampler, Tr
   for (int depth = 1;; ++depth) {
     Hit hit;
     ++counters.closest_hit_rays;
-    if (!ctx_.backend->intersect(ray, hit, counters.query_stats())) {
+    if (!ctx_.backend->intersect_ids(ray, hit, counters.query_stats())) {
       result += throughput * escaped_radiance(ctx_, ray.dir, strategy, prev_delta, prev_bsdf_pdf);
       break;
     }

@@ -13,6 +13,7 @@
 #include "core/lights/area_lights.h"
 #include "core/lights/environment_light.h"
 #include "core/materials/bsdf.h"
+#include "core/render/triangle_surface.h"
 #include "core/sampling/sampler.h"
 #include "core/scene/scene.h"
 
@@ -61,6 +62,7 @@ struct GeomShading {
   bool emissive = false;
   bool sphere = false;       // where the geometry lives: scene->geometry.spheres or .meshes ...
   std::uint32_t shape = 0;   // ... at this index
+  std::uint32_t first_triangle = 0;  // meshes: where the mesh's triangles start in SceneContext::triangles
 };
 
 // Everything an integrator reads. Built once per render, shared by all threads.
@@ -70,6 +72,9 @@ struct SceneContext {
   const EnvironmentLight* environment = nullptr;  // null: rays that escape carry no radiance
   const LightSampler* lights = nullptr;           // null: no light sampling (scene has no emitters)
   std::vector<GeomShading> geoms;                 // per geometry id
+  // Every mesh triangle, mesh after mesh (GeomShading::first_triangle + prim_id): what turns a closest hit's
+  // t and ids into a surface point, so that the integrators ask the backend for t and ids only.
+  std::vector<TriangleSurface> triangles;
 
   static SceneContext make(const Scene& scene, const Backend& backend, const EnvironmentLight* environment,
                            const LightSampler* lights);

@@ -51,7 +51,7 @@ void LightTracer::trace_path(std::uint64_t index, std::vector<Splat>& out, Trace
   for (int depth = 1; max_depth < 0 || depth + 1 <= max_depth; ++depth) {
     ++counters.closest_hit_rays;
     Hit hit;
-    ctx_.backend->intersect(ray, hit, counters.query_stats());
+    ctx_.backend->intersect_ids(ray, hit, counters.query_stats());
     if (!hit.found()) return;
     // Decided from the material before the surface point is computed: most light paths end here.
     const Bsdf& bsdf = ctx_.geoms[hit.geom_id].bsdf;

@@ -26,10 +26,17 @@ SceneContext SceneContext::make(const Scene& scene, const Backend& backend, cons
     g.emissive = m.type == MaterialType::Emissive;
     g.emission = g.emissive ? m.radiance : glm::vec3(0.0f);
   }
+  std::size_t triangle_count = 0;
+  for (const TriangleMesh& m : scene.geometry.meshes) triangle_count += m.triangle_count();
+  ctx.triangles.reserve(triangle_count);
   for (std::size_t i = 0; i < scene.geometry.meshes.size(); ++i) {
-    GeomShading& g = ctx.geoms[scene.geometry.meshes[i].geom_id];
+    const TriangleMesh& m = scene.geometry.meshes[i];
+    GeomShading& g = ctx.geoms[m.geom_id];
     g.sphere = false;
     g.shape = static_cast<std::uint32_t>(i);
+    g.first_triangle = static_cast<std::uint32_t>(ctx.triangles.size());
+    for (const glm::uvec3& tri : m.indices)
+      ctx.triangles.push_back(TriangleSurface::make(m.positions[tri.x], m.positions[tri.y], m.positions[tri.z]));
   }
   for (std::size_t i = 0; i < scene.geometry.spheres.size(); ++i) {
     GeomShading& g = ctx.geoms[scene.geometry.spheres[i].geom_id];
@@ -84,7 +91,11 @@ glm::vec3 weighted_surface_emission(const SceneContext& ctx, const SurfacePoint&
                                     const glm::vec3& prev_p) {
   const glm::vec3 le = sp.geom->emission;
   if (prev_delta || ctx.lights == nullptr) return le;
-  return le * emission_weight(strategy, prev_delta, prev_bsdf_pdf, ctx.lights->pdf_surface(prev_p, hit, sp.p));
+  // The hit came from Backend::intersect_ids, whose ng is unspecified: pdf_surface reads a sphere's normal,
+  // so it gets the surface point's.
+  Hit at = hit;
+  at.ng = sp.ng;
+  return le * emission_weight(strategy, prev_delta, prev_bsdf_pdf, ctx.lights->pdf_surface(prev_p, at, sp.p));
 }
 
 }  // namespace twinray

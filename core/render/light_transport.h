@@ -12,9 +12,10 @@
 //    direction and of the length (a few ulps), with wide margin, and never reaches a real occluder unless it
 //    lies within 1e-4 of the distance from the light's surface (0.35 mm in a 35-unit scene).
 //  - A shadow ray toward the environment has tmax = +inf.
-// The hit point itself is recomputed from barycentrics (triangles) or from centre + radius * normal
-// (spheres) rather than taken as org + t dir: its error is then relative to the vertex coordinates, which
-// is the error model the Wächter-Binder offset is built for, however long the ray was.
+// The hit point itself is rebuilt from barycentrics (triangles: those of org + t dir, clamped to the
+// triangle, triangle_surface.h) or from centre + radius * normal (spheres) rather than taken as org + t dir:
+// its error is then relative to the vertex coordinates, which is the error model the Wächter-Binder offset
+// is built for, however long the ray was.
 
 #include "core/render/integrator.h"
 
@@ -48,26 +49,25 @@ struct SurfacePoint {
 };
 
 // The surface point of `hit` on `ray`, whose direction must be unit length (camera rays and every ray the
-// integrators spawn are): wo is then -dir without a normalisation.
+// integrators spawn are): wo is then -dir without a normalisation. Reads t and the ids of the hit only, so
+// it takes the answer of Backend::intersect_ids: triangles from SceneContext::triangles (triangle_surface.h),
+// spheres from the double-precision root (sphere_robust.h), each with the normal a full closest-hit query
+// would have reported.
 [[gnu::always_inline]] inline SurfacePoint make_surface_point(const SceneContext& ctx, const Ray& ray, const Hit& hit) {
   SurfacePoint sp;
-  sp.ng = hit.ng;
   sp.wo = -ray.dir;
   sp.geom = &ctx.geoms[hit.geom_id];
   if (sp.geom->sphere) {
     const Sphere& s = ctx.scene->geometry.spheres[sp.geom->shape];
     // In double and rounded once (sphere_robust.h): center + radius * ng in float is off by ulps of the
     // center and the radius, enough to start secondary rays inside a large sphere.
-    sp.p = sphere_hit_point(ray.org, ray.dir, hit.t, s.center, s.radius);
+    sphere_hit_point_and_normal(ray.org, ray.dir, hit.t, s.center, s.radius, sp.p, sp.ng);
   } else {
-    const TriangleMesh& m = ctx.scene->geometry.meshes[sp.geom->shape];
-    const glm::uvec3 tri = m.indices[hit.prim_id];
-    const glm::vec3 &p0 = m.positions[tri.x], &p1 = m.positions[tri.y], &p2 = m.positions[tri.z];
-    sp.p = (1.0f - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
-    // The barycentric point and the triangle test err by ulps of the vertices, which may be far larger
-    // than the point's own coordinates.
-    const glm::vec3 m3 = glm::max(glm::abs(p0), glm::max(glm::abs(p1), glm::abs(p2)));
-    sp.error_scale = std::max(m3.x, std::max(m3.y, m3.z));
+    const TriangleSurface& tri = ctx.triangles[sp.geom->first_triangle + hit.prim_id];
+    sp.p = tri.point(ray, hit.t);
+    sp.ng = tri.ng;
+    // The point errs by ulps of the vertices, which may be far larger than its own coordinates.
+    sp.error_scale = tri.error_scale;
   }
   return sp;
 }

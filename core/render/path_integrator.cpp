@@ -135,7 +135,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   const auto advance = [&](int first_depth, std::size_t n_active) {
     for (int depth = first_depth; n_active > 0; ++depth) {
       counters.closest_hit_rays += n_active;
-      for (std::size_t a = 0; a < n_active; ++a) ctx_.backend->intersect(rays[a], hits[a], counters.query_stats());
+      for (std::size_t a = 0; a < n_active; ++a) ctx_.backend->intersect_ids(rays[a], hits[a], counters.query_stats());
 
       // Hits: escaped radiance, emission, and the vertices that scatter.
       const bool last_segment = settings_.max_depth >= 0 && depth >= settings_.max_depth;
