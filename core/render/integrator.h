@@ -51,7 +51,15 @@ struct IntegratorSettings {
   // vertex and its light sample. 1: no splitting. 4 (the default) takes 24% off time x relMSE on the Cornell
   // box at equal samples per pixel and adds 8% on the mirror-and-glass box (docs/rendering.md#path-splitting).
   std::uint32_t splits = 4;
+  // Light connections (core/render/light_connection.h): at the camera ray's hit, when non-delta, this many
+  // light subpaths start on the surface lights and each is joined to it at its first non-delta hit, MIS
+  // weighted against the path tracer's two ways to the same paths. 0: none. Only with the Mis strategy and
+  // max_depth unlimited or at least 3 (the renderer turns them off otherwise).
+  std::uint32_t light_connections = 0;
 };
+
+// Largest IntegratorSettings::light_connections the commands accept.
+inline constexpr std::uint32_t kMaxLightConnections = 4;
 
 // What a hit needs to know about the surface of one geometry id, gathered once per render so that shading
 // a hit costs one table lookup (not shape -> material -> BSDF).

@@ -81,9 +81,13 @@ glm::vec3 escaped_radiance(const SceneContext& ctx, const glm::vec3& dir, Sampli
 
 glm::vec3 weighted_surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
                                     SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
-                                    const glm::vec3& prev_p) {
+                                    const glm::vec3& prev_p, float connection_factor) {
   const glm::vec3 le = sp.geom->emission;
   if (prev_delta || ctx.lights == nullptr) return le;
+  if (connection_factor > 0.0f && strategy == SamplingStrategy::Mis) {
+    const float c = connection_factor * ctx.lights->emission_pdf_area(hit);
+    return le * power_heuristic3(prev_bsdf_pdf, ctx.lights->pdf_surface(prev_p, hit, sp.p), c);
+  }
   return le * emission_weight(strategy, prev_delta, prev_bsdf_pdf, ctx.lights->pdf_surface(prev_p, hit, sp.p));
 }
 
