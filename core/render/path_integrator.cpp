@@ -27,9 +27,10 @@ struct PathState {
   // non-delta first vertex when light_traced_caustics is on.
   bool caustic_by_light_tracer = false;
   bool split = false;  // splitting: the path's continuations have been split off (only once per path)
-  // Light connections: at x2 (the vertex after a non-delta x1) connection_factor(...), after x2's BSDF sample
-  // that times |cos(n2, wi)|; 0 elsewhere and without connections (light_connection.h).
+  // Light connections: at a non-delta vertex behind a non-delta one, connection_factor(...); after its BSDF
+  // sample that times |cos(n, wi)|; 0 elsewhere and without connections (light_connection.h).
   float connection_factor = 0.0f;
+  bool from_split = false;  // the current ray is one of `splits` continuations of its previous vertex
 };
 
 // Paths still going, compacted after every segment: rays[a] and hits[a] belong to path active[a]. Vertices
@@ -44,14 +45,17 @@ struct ChunkScratch {
   std::array<SurfacePoint, kCapacity> vertex;
   std::array<std::uint16_t, kCapacity> vertex_path;
   std::array<glm::vec2, kCapacity> u_light, u_bsdf;
-  // Light connections at the first vertices: each vertex's light subpaths (their two 2D sampler values, the
-  // emission sample, the ray to the first hit and that hit, the vertex they belong to).
+  // Light connections: each path's light subpaths, traced at its first vertex (their two 2D sampler values,
+  // the ray to the first hit and that hit, in trace order with their path), and per path the emission sample
+  // and the first hit's surface point (`light_vertex_valid`: non-delta, so connections can be made to it).
   static constexpr std::size_t kLightCapacity = kCapacity * kMaxLightConnections;
   std::array<glm::vec2, kLightCapacity> u_emit_point, u_emit_dir;
-  std::array<EmissionSample, kLightCapacity> emission;
   std::array<Ray, kLightCapacity> light_rays;
   std::array<Hit, kLightCapacity> light_hits;
-  std::array<std::uint16_t, kLightCapacity> light_vertex;
+  std::array<std::uint32_t, kLightCapacity> light_slot;
+  std::array<EmissionSample, kLightCapacity> emission;
+  std::array<SurfacePoint, kLightCapacity> light_vertex;
+  std::array<bool, kLightCapacity> light_vertex_valid;
   // A segment's shadow rays: a light sample per vertex, and the light connections of the first vertices.
   std::array<Ray, kCapacity + kLightCapacity> shadow_rays;
   std::array<glm::vec3, kCapacity + kLightCapacity> shadow_contribution;
@@ -124,10 +128,12 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   auto& split_sampler = scratch.split_sampler;
   auto& u_emit_point = scratch.u_emit_point;
   auto& u_emit_dir = scratch.u_emit_dir;
-  auto& emission = scratch.emission;
   auto& light_rays = scratch.light_rays;
   auto& light_hits = scratch.light_hits;
+  auto& light_slot = scratch.light_slot;
+  auto& emission = scratch.emission;
   auto& light_vertex = scratch.light_vertex;
+  auto& light_vertex_valid = scratch.light_vertex_valid;
   const std::uint32_t connections = settings_.light_connections;
 
   for (std::size_t i = 0; i < n; ++i) {
@@ -149,9 +155,8 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
     st.prev_delta = bs.delta;
     st.prev_bsdf_pdf = bs.pdf;
     st.prev_p = sp.p;
-    // Light connections: past x2 no strategy but the path tracer's generates the path.
-    if (st.connection_factor > 0.0f)
-      st.connection_factor = depth == 2 ? st.connection_factor * std::abs(glm::dot(sp.ng, bs.wi)) : 0.0f;
+    st.from_split = scale != 1.0f;
+    if (st.connection_factor > 0.0f) st.connection_factor *= std::abs(glm::dot(sp.ng, bs.wi));
     // A continuation's throughput carries the 1/splits of its split: the roulette looks at the throughput the
     // path would have unsplit (its survival scale times splits), or it would kill the continuations early
     // and add back the noise the split took off (docs/rendering.md#path-splitting).
@@ -186,11 +191,14 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         // Emission after a delta vertex behind a non-delta first vertex belongs to the light tracer.
         if (sp.geom->emissive && !(st.caustic_by_light_tracer && st.prev_delta))
           out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p,
-                                                     depth == 3 ? st.connection_factor : 0.0f);
+                                                     st.connection_factor);
         if (last_segment || sp.bsdf().is_black()) continue;
-        // x2 behind a non-delta x1: the paths through it compete with the light connections made at x1.
-        if (connections > 0 && depth == 2 && !st.prev_delta && !sp.bsdf().is_delta())
-          st.connection_factor = connection_factor(connections, splits, st.prev_p, st.prev_bsdf_pdf, sp.p, sp.ng, rays[a].dir);
+        // A non-delta vertex behind a non-delta one that made light connections: the paths through it compete
+        // with those connections (light_connection.h).
+        st.connection_factor =
+            connections > 0 && !st.prev_delta && !sp.bsdf().is_delta() && depth - 1 <= kLightConnectionMaxDepth
+                ? connection_factor(connections, st.from_split ? splits : 1u, st.prev_p, st.prev_bsdf_pdf, sp.p, sp.ng, rays[a].dir)
+                : 0.0f;
         vertex[n_vertices] = sp;
         vertex_path[n_vertices] = i;
         ++n_vertices;
@@ -200,17 +208,17 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       // that every vertex takes the same dimensions), the BSDF sample (2D), the roulette (1D, only once it
       // plays). A vertex that is split keeps its path's sampler as it is after the light sample: each
       // continuation draws the BSDF sample and everything after from its own Sampler::split.
-      // With light connections, a first vertex that is non-delta draws its light subpaths' values (a 2D pair
-      // each) after its light sample.
+      // With light connections, a first vertex draws its light subpaths' values (a 2D pair each) after its
+      // light sample.
       const auto splits_at = [&](std::size_t v) {
         return splits > 1 && !state[vertex_path[v]].split && !vertex[v].bsdf().is_delta();
       };
-      const bool connect = connections > 0 && depth == 1;
+      const bool trace_light = connections > 0 && depth == 1;
       for (std::size_t v = 0; v < n_vertices; ++v) {
         const std::uint16_t i = vertex_path[v];
         Sampler& sampler = samples[i].sampler;
         u_light[v] = sampler.next_2d();
-        if (connect && !vertex[v].bsdf().is_delta()) {
+        if (trace_light) {
           for (std::uint32_t m = 0; m < connections; ++m) {
             u_emit_point[v * connections + m] = sampler.next_2d();
             u_emit_dir[v * connections + m] = sampler.next_2d();
@@ -226,7 +234,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         if (vertex[v].bsdf().is_delta()) continue;
         ShadowQuery q;
         const std::uint16_t i = vertex_path[v];
-        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q, depth == 2 ? state[i].connection_factor : 0.0f))
+        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q, state[i].connection_factor))
           continue;
         shadow_rays[n_shadow] = q.ray;
         shadow_contribution[n_shadow] = state[i].throughput * q.contribution;
@@ -234,14 +242,15 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         ++n_shadow;
       }
 
-      // Light connections at the first vertices: the light subpaths to their first hits, then a shadow ray
-      // from each hit that is non-delta to its camera vertex (after the vertices' light samples, as alone).
-      if (connect) {
+      // Light subpaths, traced at the first vertices: the emission samples, then their rays to the first hits.
+      if (trace_light) {
         std::size_t n_light = 0;
         for (std::size_t v = 0; v < n_vertices; ++v) {
-          if (vertex[v].bsdf().is_delta()) continue;
+          const std::uint16_t i = vertex_path[v];
           for (std::uint32_t m = 0; m < connections; ++m) {
-            EmissionSample& es = emission[n_light];
+            const std::size_t slot = i * connections + m;
+            light_vertex_valid[slot] = false;
+            EmissionSample& es = emission[slot];
             if (!ctx_.lights->sample_emission(u_emit_point[v * connections + m], u_emit_dir[v * connections + m], es))
               continue;
             Ray& r = light_rays[n_light];
@@ -249,7 +258,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
             r.dir = es.dir;
             r.tmin = 0.0f;
             r.tmax = std::numeric_limits<float>::infinity();
-            light_vertex[n_light] = static_cast<std::uint16_t>(v);
+            light_slot[n_light] = static_cast<std::uint32_t>(slot);
             ++n_light;
           }
         }
@@ -261,16 +270,31 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
           if (!hit.found()) continue;
           const GeomShading& g = ctx_.geoms[hit.geom_id];
           if (g.bsdf.is_delta() || g.bsdf.is_black()) continue;
-          const std::size_t v = light_vertex[l];
+          light_vertex[light_slot[l]] = make_surface_point(ctx_, light_rays[l], hit);
+          light_vertex_valid[light_slot[l]] = true;
+        }
+      }
+
+      // Light connections at the non-delta vertices: a shadow ray to each of the path's light vertices (after
+      // the vertices' light samples, as alone). A connection at the vertex reached by `depth` segments makes
+      // paths of depth + 2.
+      if (connections > 0 && depth <= kLightConnectionMaxDepth && (settings_.max_depth < 0 || depth + 2 <= settings_.max_depth)) {
+        for (std::size_t v = 0; v < n_vertices; ++v) {
+          if (vertex[v].bsdf().is_delta()) continue;
           const std::uint16_t i = vertex_path[v];
-          ShadowQuery q;
-          if (!prepare_light_connection(ctx_, vertex[v], state[i].throughput, emission[l],
-                                        make_surface_point(ctx_, light_rays[l], hit), connections, splits, q))
-            continue;
-          shadow_rays[n_shadow] = q.ray;
-          shadow_contribution[n_shadow] = q.contribution;
-          shadow_owner[n_shadow] = i;
-          ++n_shadow;
+          const std::uint32_t pt_count = splits_at(v) ? splits : 1u;
+          for (std::uint32_t m = 0; m < connections; ++m) {
+            const std::size_t slot = i * connections + m;
+            if (!light_vertex_valid[slot]) continue;
+            ShadowQuery q;
+            if (!prepare_light_connection(ctx_, vertex[v], state[i].throughput, emission[slot], light_vertex[slot],
+                                          connections, pt_count, q))
+              continue;
+            shadow_rays[n_shadow] = q.ray;
+            shadow_contribution[n_shadow] = q.contribution;
+            shadow_owner[n_shadow] = i;
+            ++n_shadow;
+          }
         }
       }
 
