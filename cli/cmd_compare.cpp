@@ -137,7 +137,7 @@ void add_compare_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--splits", opt->splits, "twinray's path continuations from each first non-delta vertex, 1 to 16 "
                                            "(as render --splits; default: render's)");
   cmd->add_option("--light-connections", opt->light_connections,
-                  "twinray's light subpaths joined to each camera ray's non-delta hit, 0 to 4 (as render "
+                  "twinray's light subpaths per camera sample joined to its camera paths, 0 to 4 (as render "
                   "--light-connections; default: render's)");
   cmd->add_option("--caustics", opt->caustics, "twinray's caustic light tracing: auto or off (docs/rendering.md)")
       ->capture_default_str();

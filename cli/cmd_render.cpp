@@ -294,8 +294,8 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--splits", opt->splits, "Path continuations from each non-delta first vertex, 1 to 16 "
                                            "(path integrator; default 4; docs/rendering.md#path-splitting)");
   cmd->add_option("--light-connections", opt->light_connections,
-                  "Light subpaths joined to each camera ray's non-delta hit, 0 to 4, MIS weighted with the path "
-                  "tracer (path integrator; docs/rendering.md#light-connections)");
+                  "Light subpaths per camera sample joined to its non-delta vertices up to 3 segments deep, 0 to 4, "
+                  "MIS weighted with the path tracer (path integrator; default 1; docs/rendering.md#light-connections)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
   cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol4d (Owen-scrambled Sobol, pairs of 2D draws as 4D points; default), "
                   "sobol (Owen-scrambled Sobol, every 2D draw on its own) or independent (PCG32)")

@@ -10,8 +10,9 @@
 // (core/render/light_tracer.h), which counts those caustic paths instead. With splits > 1 a path continues
 // `splits` times from its first non-delta vertex, each continuation with 1/splits of the throughput, its own
 // Sampler::split and a roulette on the unsplit throughput (docs/rendering.md#path-splitting). With
-// light_connections > 0 the camera ray's hit is also joined to the first hits of light subpaths, a third
-// strategy for the paths of three segments (core/render/light_connection.h).
+// light_connections > 0 each camera sample also traces light subpaths of one segment and joins its non-delta
+// vertices up to kLightConnectionMaxDepth segments deep to their hits: a third strategy for the paths whose
+// last two vertices are a diffuse bounce and the light (core/render/light_connection.h).
 //
 // Wavefront: the paths of a batch (one sample of each pixel of a tile) advance together, one segment at a
 // time: all their rays are traced, then every path is shaded (emission, light sample, BSDF sample,
