@@ -30,6 +30,7 @@ struct CompareCommandOptions {
   std::optional<int> rr_depth;
   std::string caustics = "auto";
   std::optional<std::uint32_t> splits;
+  std::optional<std::uint32_t> light_connections;
   std::string variant = "auto";
   std::string reference;
   std::string out;
@@ -59,6 +60,8 @@ int run_compare_command(const CompareCommandOptions& opt) {
   if (!caustics) return report_bad_input("compare", "unknown --caustics '" + opt.caustics + "' (choose from auto, off)");
   if (opt.splits && (*opt.splits < 1 || *opt.splits > kMaxSplits))
     return report_bad_input("compare", "--splits must be between 1 and " + std::to_string(kMaxSplits));
+  if (opt.light_connections && *opt.light_connections > kMaxLightConnections)
+    return report_bad_input("compare", "--light-connections must be between 0 and " + std::to_string(kMaxLightConnections));
   std::string why;
   if (!compare::probe_mitsuba(&why)) return report_bad_input("compare", why);
 
@@ -75,6 +78,7 @@ int run_compare_command(const CompareCommandOptions& opt) {
   s.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   s.caustics = *caustics;
   if (opt.splits) s.splits = *opt.splits;
+  if (opt.light_connections) s.light_connections = *opt.light_connections;
   s.mitsuba_variant = opt.variant;
   s.reference = opt.reference;
   s.out = opt.out.empty() ? std::filesystem::path("compare-" + std::filesystem::path(opt.scene).stem().string())
@@ -132,6 +136,9 @@ void add_compare_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette depth of both renderers (default: the scene's)");
   cmd->add_option("--splits", opt->splits, "twinray's path continuations from each first non-delta vertex, 1 to 16 "
                                            "(as render --splits; default: render's)");
+  cmd->add_option("--light-connections", opt->light_connections,
+                  "twinray's light subpaths per camera sample joined to its camera paths, 0 to 4 (as render "
+                  "--light-connections; default: render's)");
   cmd->add_option("--caustics", opt->caustics, "twinray's caustic light tracing: auto or off (docs/rendering.md)")
       ->capture_default_str();
   cmd->add_option("--variant", opt->variant, "Mitsuba variant: auto (llvm_ad_rgb, else scalar_rgb), llvm_ad_rgb, scalar_rgb")->capture_default_str();

@@ -36,6 +36,7 @@ struct RenderCommandOptions {
   std::optional<int> max_depth;
   std::optional<int> rr_depth;
   std::optional<std::uint32_t> splits;
+  std::optional<std::uint32_t> light_connections;
   std::optional<std::uint64_t> seed;
   int threads = 0;
   std::string output;
@@ -101,6 +102,8 @@ int run_render(const RenderCommandOptions& opt) {
   if (opt.rr_depth && *opt.rr_depth < 1) return report_bad_input("render", "--rr-depth must be at least 1");
   if (opt.splits && (*opt.splits < 1 || *opt.splits > kMaxSplits))
     return report_bad_input("render", "--splits must be between 1 and " + std::to_string(kMaxSplits));
+  if (opt.light_connections && *opt.light_connections > kMaxLightConnections)
+    return report_bad_input("render", "--light-connections must be between 0 and " + std::to_string(kMaxLightConnections));
   if (opt.threads < 0) return report_bad_input("render", "--threads must be positive (0 = all cores)");
   std::string aux_error;
   const std::optional<AuxChannels> aux = parse_aux(opt.aux, aux_error);
@@ -130,6 +133,7 @@ int run_render(const RenderCommandOptions& opt) {
   ro.settings.max_depth = opt.max_depth.value_or(scene.render.max_depth);
   ro.settings.rr_depth = opt.rr_depth.value_or(scene.render.rr_depth);
   if (opt.splits) ro.settings.splits = *opt.splits;
+  if (opt.light_connections) ro.settings.light_connections = *opt.light_connections;
   ro.seed = opt.seed.value_or(scene.render.seed);
   ro.aux = *aux;
   if (ro.spp < 1) return report_bad_input("render", "the scene's render.spp must be at least 1");
@@ -190,9 +194,9 @@ int run_render(const RenderCommandOptions& opt) {
   fmt::print("scene        {}\n", scene.source.string());
   fmt::print("backend      {} (build {:.3f} s, {:.1f} MiB)\n", backend->name(), build.build_seconds,
              static_cast<double>(build.memory_bytes) / (1024.0 * 1024.0));
-  fmt::print("integrator   {} (strategy {}, env sampling {}, max depth {}, rr depth {}, splits {})\n",
+  fmt::print("integrator   {} (strategy {}, env sampling {}, max depth {}, rr depth {}, splits {}, light connections {})\n",
              to_string(ro.integrator), to_string(ro.settings.strategy), opt.env_sampling, depth_text,
-             ro.settings.rr_depth, ro.settings.splits);
+             ro.settings.rr_depth, ro.settings.splits, ro.settings.light_connections);
   fmt::print("image        {}x{}, {} spp, seed {}, sampler {}, {} threads\n", image.width, image.height, st.spp, ro.seed,
              to_string(ro.sampler), threads);
   for (const FeatureNote& n : features.notes)
@@ -226,6 +230,7 @@ int run_render(const RenderCommandOptions& opt) {
         {"max_depth", ro.settings.max_depth},
         {"rr_depth", ro.settings.rr_depth},
         {"splits", ro.settings.splits},
+        {"light_connections", ro.settings.light_connections},
         {"width", image.width},
         {"height", image.height},
         {"spp", st.spp},
@@ -288,6 +293,9 @@ void add_render_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--rr-depth", opt->rr_depth, "Russian roulette from this many segments on (default: the scene's render.rr_depth, 5)");
   cmd->add_option("--splits", opt->splits, "Path continuations from each non-delta first vertex, 1 to 16 "
                                            "(path integrator; default 4; docs/rendering.md#path-splitting)");
+  cmd->add_option("--light-connections", opt->light_connections,
+                  "Light subpaths per camera sample joined to its non-delta vertices up to 3 segments deep, 0 to 4, "
+                  "MIS weighted with the path tracer (path integrator; default 1; docs/rendering.md#light-connections)");
   cmd->add_option("--seed", opt->seed, "Random seed (default: the scene's render.seed)");
   cmd->add_option("--sampler", opt->sampler, "Random numbers: sobol4d (Owen-scrambled Sobol, pairs of 2D draws as 4D points; default), "
                   "sobol (Owen-scrambled Sobol, every 2D draw on its own) or independent (PCG32)")

@@ -15,9 +15,10 @@
 # warm-up render). Efficiency = seconds x relMSE, lower is better; the ratio is twinray's over Mitsuba's
 # (the goal: at most 0.5).
 #
-# TWINRAY_CAUSTICS=off renders twinray without caustic light tracing (compare --caustics; default auto), and
+# TWINRAY_CAUSTICS=off renders twinray without caustic light tracing (compare --caustics; default auto),
 # TWINRAY_SPLITS=K with K path continuations from each first non-delta vertex (compare --splits; default
-# render's), for a before/after with one build.
+# render's), and TWINRAY_LIGHT_CONNECTIONS=M with M light subpaths joined to the camera paths (compare
+# --light-connections; default render's), for a before/after with one build.
 #
 # Needs Mitsuba (bash scripts/setup-mitsuba.sh) and a Release build (build/, or $TWINRAY_BUILD_DIR). The
 # machine is shared: the script prints the CPU and the load average, and the medians absorb some noise.
@@ -35,7 +36,7 @@ out="${TWINRAY_BENCH_OUT:-$root/out/bench-mitsuba}"
 mkdir -p "$out"
 
 echo "bench-mitsuba: $(lscpu | grep 'Model name' | sed 's/  */ /g'), $(nproc) cores; load average $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "bench-mitsuba: $repeats repetitions of $spp spp, 2 threads, both renderers back to back, twinray --caustics ${TWINRAY_CAUSTICS:-auto}${TWINRAY_SPLITS:+ --splits $TWINRAY_SPLITS}"
+echo "bench-mitsuba: $repeats repetitions of $spp spp, 2 threads, both renderers back to back, twinray --caustics ${TWINRAY_CAUSTICS:-auto}${TWINRAY_SPLITS:+ --splits $TWINRAY_SPLITS}${TWINRAY_LIGHT_CONNECTIONS:+ --light-connections $TWINRAY_LIGHT_CONNECTIONS}"
 for scene in cornell-box-reference cornell-mirror-glass; do
   reference=()
   ref="${TWINRAY_SHARED:-}/references/cornell-box/mitsuba_ref.exr"
@@ -43,6 +44,7 @@ for scene in cornell-box-reference cornell-mirror-glass; do
   for r in $(seq 1 "$repeats"); do
     "$twinray" compare "$root/scenes/$scene.json" --spp "$spp" --batches 2 --threads 2 --seed "$r" \
       --caustics "${TWINRAY_CAUSTICS:-auto}" ${TWINRAY_SPLITS:+--splits "$TWINRAY_SPLITS"} \
+      ${TWINRAY_LIGHT_CONNECTIONS:+--light-connections "$TWINRAY_LIGHT_CONNECTIONS"} \
       "${reference[@]}" --out "$out/$scene-$r" >"$out/$scene-$r.log" 2>&1 || {
       rc=$?
       # Exit 1 is a "differ" verdict: still a measurement, reported below.

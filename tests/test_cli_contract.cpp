@@ -79,6 +79,20 @@ TEST(CliContract, RenderSplitsFlagAndJsonKey) {
   }
 }
 
+TEST(CliContract, RenderLightConnectionsFlagAndJsonKey) {
+  const auto dir = scratch_dir("render-light-connections");
+  const std::string scene = quoted(source_path("scenes/cornell-box.json"));
+  const CommandResult r = run_twinray("render " + scene + " --spp 1 --light-connections 2 -o " + quoted(dir / "c.exr") +
+                                      " --json " + quoted(dir / "c.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_json(dir / "c.json").at("light_connections").get<int>(), 2);
+  EXPECT_NE(r.output.find("light connections 2"), std::string::npos) << r.output;
+  const CommandResult b = run_twinray("render " + scene + " --spp 1 --light-connections 5 -o " + quoted(dir / "bad.exr"));
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_NE(b.output.find("--light-connections"), std::string::npos) << b.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad.exr"));
+}
+
 TEST(CliContract, InfoBuildsBackendsOnlyForGeometryPresent) {
   const auto dir = scratch_dir("info-build");
   const CommandResult r = run_twinray("info " + quoted(source_path("scenes/cornell-box.json")) +

@@ -123,6 +123,27 @@ TEST(IntegratorAnalytic, SplitPathsFollowTheGeometricSeries) {
     }
 }
 
+// Light connections (IntegratorSettings::light_connections) add a third strategy for the paths of three
+// segments, whose MIS weights must sum to 1 with the path tracer's two: the enclosure's geometric series at
+// depth 3 (where the connections share the last term, a^2 Le, with BSDF and light sampling at x2) and
+// unlimited, with and without splitting (the weights use the split count).
+TEST(IntegratorAnalytic, LightConnectionsKeepTheGeometricSeries) {
+  const float Le = 1.0f, a = 0.5f;
+  Scene scene = empty_scene({0.1f, 0.2f, 0.3f}, {0.1f, 0.2f, -1.0f}, {0, 1, 0}, 90.0f, 12, 12);
+  add_box(scene, {-1, -1, -1}, {1, 1, 1}, add_material(scene, emissive(glm::vec3(Le), glm::vec3(a))), true);
+  for (const auto& [splits, connections] : {std::pair{1u, 1u}, std::pair{4u, 1u}, std::pair{2u, 3u}})
+    for (int k : {3, -1}) {
+      RenderOptions o = path_options(48, k);
+      o.settings.splits = splits;
+      o.settings.light_connections = connections;
+      const Rendered r = render_scene(scene, o);
+      const double expected = k < 0 ? Le / (1.0 - a) : Le * (1.0 - std::pow(a, k)) / (1.0 - a);
+      SCOPED_TRACE(::testing::Message() << "splits " << splits << ", light connections " << connections << ", max depth " << k);
+      expect_region(r, 0, expected, all_pixels, "enclosure");
+      EXPECT_EQ(r.stats.nonfinite_samples, 0u);
+    }
+}
+
 // Irradiance at p from a uniform polygonal Lambertian emitter (Lambert's formula):
 //   E = Le / 2 * sum_i angle(v_i, v_i+1) * (n . normalize(v_i x v_i+1)),  v_i = corner_i - p.
 double polygon_irradiance(const std::vector<glm::dvec3>& corners, glm::dvec3 p, glm::dvec3 n, double Le) {

@@ -37,10 +37,11 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
 
   for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Sobol4d})
   for (const int max_depth : {-1, 6})
-  for (const std::uint32_t splits : {1u, 3u}) {
+  for (const auto& [splits, connections] : {std::pair{1u, 0u}, std::pair{3u, 0u}, std::pair{3u, 2u}}) {
     IntegratorSettings settings;
     settings.max_depth = max_depth;
     settings.splits = splits;
+    settings.light_connections = connections;
     const PathIntegrator integrator(ctx, settings);
     // 300 samples: one full chunk of 256 and a partial one; several samples per pixel of a 10 x 10 patch
     // around the glass ball.
@@ -64,7 +65,7 @@ TEST(PathWavefront, BatchesGiveEachSampleItsLonePathRadiance) {
     for (std::size_t k = 0; k < kSamples; ++k) {
       FirstHitInfo lone_first;
       const glm::vec3 L = integrator.radiance(lone[k].ray, lone[k].sampler, lone_counters, &lone_first);
-      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth << ", " << to_string(kind) << ", splits " << splits;
+      EXPECT_EQ(bits(out[k]), bits(L)) << "sample " << k << ", max depth " << max_depth << ", " << to_string(kind) << ", splits " << splits << ", light connections " << connections;
       EXPECT_EQ(first[k].hit, lone_first.hit);
       EXPECT_EQ(bits(first[k].normal), bits(lone_first.normal));
       EXPECT_EQ(first[k].depth, lone_first.depth);

@@ -79,6 +79,14 @@ LightSampler::LightSampler(const Scene& scene, const EnvironmentLight* env) {
     for (std::size_t i = 0; i < n; ++i)
       if (i != env_index_) surface += static_cast<double>(pmf_[i]);
     surface_fraction_ = static_cast<float>(surface);
+    emission_pdf_area_.assign(n, 0.0f);
+    for (std::size_t i = 0; i < n && surface_fraction_ > 0.0f; ++i) {
+      const float area = i < triangles_.size() ? triangles_[i].area
+                         : i - triangles_.size() < spheres_.size()
+                             ? 4.0f * kPi * spheres_[i - triangles_.size()].radius * spheres_[i - triangles_.size()].radius
+                             : 0.0f;
+      if (area > 0.0f) emission_pdf_area_[i] = pmf_[i] / surface_fraction_ / area;
+    }
     if (n <= kFewLights) {
       cdf_.assign(n + 1, 0.0f);
       double running = 0.0;
@@ -163,8 +171,13 @@ float LightSampler::pdf_surface(const glm::vec3& ref, const Hit& hit, const glm:
   if (!selection_ || hit.geom_id >= first_light_of_geom_.size()) return 0.0f;
   const std::uint32_t first = first_light_of_geom_[hit.geom_id];
   if (first == kNone) return 0.0f;
-  if (first < triangles_.size()) {
-    const std::size_t i = first + hit.prim_id;
+  return pdf_light(first < triangles_.size() ? first + hit.prim_id : first, ref, point, hit.ng);
+}
+
+float LightSampler::pdf_light(std::size_t i, const glm::vec3& ref, const glm::vec3& point,
+                               const glm::vec3& normal) const {
+  if (!selection_ || i >= pmf_.size()) return 0.0f;
+  if (i < triangles_.size()) {
     const EmissiveTriangle& tri = triangles_[i];
     const glm::vec3 d = point - ref;
     const float dist2 = glm::dot(d, d);
@@ -172,8 +185,15 @@ float LightSampler::pdf_surface(const glm::vec3& ref, const Hit& hit, const glm:
     if (!(cos_light > 0.0f) || !(tri.area > 0.0f)) return 0.0f;
     return pmf_[i] * dist2 / (cos_light * tri.area);
   }
-  const EmissiveSphere& sph = spheres_[first - triangles_.size()];
-  return pmf_[first] * sphere_pdf(sph, ref, point, hit.ng);
+  if (i - triangles_.size() < spheres_.size()) return pmf_[i] * sphere_pdf(spheres_[i - triangles_.size()], ref, point, normal);
+  return 0.0f;
+}
+
+float LightSampler::emission_pdf_area(const Hit& hit) const {
+  if (!selection_ || hit.geom_id >= first_light_of_geom_.size()) return 0.0f;
+  const std::uint32_t first = first_light_of_geom_[hit.geom_id];
+  if (first == kNone) return 0.0f;
+  return emission_pdf_area(first < triangles_.size() ? first + hit.prim_id : first);
 }
 
 float LightSampler::pdf_environment(const glm::vec3& dir) const {
@@ -216,6 +236,8 @@ bool LightSampler::sample_emission(glm::vec2 u_point, glm::vec2 u_dir, EmissionS
   out.dir = glm::normalize(Frame::from_normal(out.normal).to_world(sample_cosine_hemisphere(u_dir)));
   if (!(glm::dot(out.dir, out.normal) > 0.0f)) return false;
   // Le cos / (pdf_area cos / pi) with pdf_area = pmf_surface / area.
+  out.light = static_cast<std::uint32_t>(i);
+  out.pdf_area = emission_pdf_area_[i];
   out.weight = radiance * (kPi * area / pmf_surface);
   return std::isfinite(out.weight.x) && std::isfinite(out.weight.y) && std::isfinite(out.weight.z);
 }

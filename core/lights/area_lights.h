@@ -67,6 +67,7 @@ struct LightSample {
   glm::vec3 radiance{0.0f};  // radiance arriving at ref along -wi if unoccluded (0 on back sides)
   float pdf = 0.0f;          // solid angle at ref, light selection included
   bool is_environment = false;
+  std::uint32_t light = 0;   // the light's index in sample order (triangles, spheres, environment)
 };
 
 // A point on a surface light and a direction leaving its emitting side: the start of a light path
@@ -77,6 +78,8 @@ struct EmissionSample {
   glm::vec3 dir{0.0f};       // unit, cosine-distributed about `normal`
   glm::vec3 weight{0.0f};    // Le |cos| / (pdf_area pdf_dir) = pi Le / pdf_area, light selection included
   float error_scale = 0.0f;  // magnitude of the coordinates the point's error comes from (ray_offset.h)
+  std::uint32_t light = 0;   // the light's index in sample order
+  float pdf_area = 0.0f;     // area density of `point`, light selection included (emission_pdf_area(light))
 };
 
 class LightSampler {
@@ -113,6 +116,15 @@ class LightSampler {
   float pdf_surface(const glm::vec3& ref, const Hit& hit, const glm::vec3& point) const;
   // Density with which sample() would produce direction `dir` toward the environment.
   float pdf_environment(const glm::vec3& dir) const;
+  // Density (solid angle at `ref`) with which sample(ref, ...) would produce the point `point` (unit
+  // geometric normal `normal`) on light `light_index`; 0 for the environment or a light never chosen.
+  float pdf_light(std::size_t light_index, const glm::vec3& ref, const glm::vec3& point, const glm::vec3& normal) const;
+  // Area density with which sample_emission() starts a light path at a point of light `light_index` (selection
+  // included; 0 for the environment and for lights never chosen), and the same for the light hit `hit`.
+  float emission_pdf_area(std::size_t light_index) const {
+    return light_index < emission_pdf_area_.size() ? emission_pdf_area_[light_index] : 0.0f;
+  }
+  float emission_pdf_area(const Hit& hit) const;
 
   // Probability of choosing each light, in sample order: triangles, spheres, environment (for tests).
   float selection_probability(std::size_t light_index) const;
@@ -146,6 +158,7 @@ class LightSampler {
   std::vector<float> inv_width_;  // 1 / (cdf[i+1] - cdf[i]), 0 for empty bins; only when n <= kFewLights
   std::vector<float> pmf_;        // size n
   float surface_fraction_ = 0.0f; // probability that sample() picks a surface light (1 without environment)
+  std::vector<float> emission_pdf_area_;  // per light: pmf / surface_fraction / area (0: environment, unused)
 };
 
 // The light sample of every path vertex, defined here and forced inline so that it compiles into the path
@@ -186,6 +199,7 @@ class LightSampler {
     s.is_environment = true;
   }
   s.pdf *= pmf;
+  s.light = static_cast<std::uint32_t>(i);
   return s.pdf > 0.0f && std::isfinite(s.pdf);
 }
 

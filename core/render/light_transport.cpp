@@ -88,14 +88,19 @@ glm::vec3 escaped_radiance(const SceneContext& ctx, const glm::vec3& dir, Sampli
 
 glm::vec3 weighted_surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
                                     SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
-                                    const glm::vec3& prev_p) {
+                                    const glm::vec3& prev_p, float connection_factor) {
   const glm::vec3 le = sp.geom->emission;
   if (prev_delta || ctx.lights == nullptr) return le;
   // The hit came from Backend::intersect_ids, whose ng is unspecified: pdf_surface reads a sphere's normal,
   // so it gets the surface point's.
   Hit at = hit;
   at.ng = sp.ng;
-  return le * emission_weight(strategy, prev_delta, prev_bsdf_pdf, ctx.lights->pdf_surface(prev_p, at, sp.p));
+  const float light_pdf = ctx.lights->pdf_surface(prev_p, at, sp.p);
+  if (connection_factor > 0.0f && strategy == SamplingStrategy::Mis) {
+    const float c = connection_factor * ctx.lights->emission_pdf_area(at);
+    return le * power_heuristic3(prev_bsdf_pdf, light_pdf, c);
+  }
+  return le * emission_weight(strategy, prev_delta, prev_bsdf_pdf, light_pdf);
 }
 
 }  // namespace twinray

@@ -38,6 +38,15 @@ inline constexpr float kShadowRayShortening = 1e-4f;
 
 inline float max_component(const glm::vec3& v) { return std::max(v.x, std::max(v.y, v.z)); }
 
+// The power heuristic over three strategies: own^2 / (own^2 + a^2 + b^2), each density already times its
+// sample count (light connections, core/render/light_connection.h).
+inline float power_heuristic3(float own, float a, float b) {
+  if (std::isinf(own)) return std::isinf(a) || std::isinf(b) ? 0.0f : 1.0f;
+  if (!(own > 0.0f)) return 0.0f;
+  const float ra = a / own, rb = b / own;
+  return 1.0f / (1.0f + ra * ra + rb * rb);
+}
+
 struct SurfacePoint {
   glm::vec3 p{0.0f};
   glm::vec3 ng{0.0f};  // unit geometric normal, as reported (never flipped)
@@ -100,8 +109,11 @@ struct ShadowQuery {
 // sampling for the Mis strategy. `u` is the sampler's 2D value for the light choice and the point on it.
 // Defined here so that the path integrator's wavefront loop inlines it: 1.2% fewer instructions of the render
 // than a call per light sample (callgrind, Cornell box).
+// `connection_factor` > 0 (light connections, core/render/light_connection.h): the vertex is a camera path's
+// x2 and the light connection strategy competes too, with C / (K p(x2)) = connection_factor * pE |cos(n2, wi)|.
 [[gnu::always_inline]] inline bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp,
-                                                       SamplingStrategy strategy, glm::vec2 u, ShadowQuery& out) {
+                                                       SamplingStrategy strategy, glm::vec2 u, ShadowQuery& out,
+                                                       float connection_factor = 0.0f) {
   if (ctx.lights == nullptr || strategy == SamplingStrategy::Bsdf) return false;
   LightSample ls;
   if (!ctx.lights->sample(sp.p, u, ls) || max_component(ls.radiance) <= 0.0f) return false;
@@ -124,7 +136,15 @@ struct ShadowQuery {
     shadow.tmin = 0.0f;
     shadow.tmax = dist2 * inv_dist * (1.0f - kShadowRayShortening);
   }
-  const float weight = strategy == SamplingStrategy::Mis ? power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf) : 1.0f;
+  float weight = 1.0f;
+  if (strategy == SamplingStrategy::Mis) {
+    if (connection_factor > 0.0f) {
+      const float c = connection_factor * ctx.lights->emission_pdf_area(ls.light) * std::abs(glm::dot(sp.ng, ls.wi));
+      weight = power_heuristic3(ls.pdf, bsdf_pdf, c);
+    } else {
+      weight = power_heuristic(1.0f, ls.pdf, 1.0f, bsdf_pdf);
+    }
+  }
   out.contribution = f * ls.radiance * (weight / ls.pdf);
   return true;
 }
@@ -138,15 +158,16 @@ glm::vec3 escaped_radiance(const SceneContext& ctx, const glm::vec3& dir, Sampli
                            bool prev_delta, float prev_bsdf_pdf);
 
 // Emission of the surface at `sp` toward the previous vertex, weighted for MIS. Zero unless the surface
-// emits and `sp.wo` is on its front side.
+// emits and `sp.wo` is on its front side. `connection_factor` > 0: the previous vertex is a camera path's x2
+// and light connections compete (core/render/light_connection.h), the factor already times |cos(n2, wi)|.
 glm::vec3 weighted_surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
                                     SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
-                                    const glm::vec3& prev_p);
+                                    const glm::vec3& prev_p, float connection_factor = 0.0f);
 inline glm::vec3 surface_emission(const SceneContext& ctx, const SurfacePoint& sp, const Hit& hit,
                                   SamplingStrategy strategy, bool prev_delta, float prev_bsdf_pdf,
-                                  const glm::vec3& prev_p) {
+                                  const glm::vec3& prev_p, float connection_factor = 0.0f) {
   if (!sp.geom->emissive || !(glm::dot(sp.ng, sp.wo) > 0.0f)) return glm::vec3(0.0f);
-  return weighted_surface_emission(ctx, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p);
+  return weighted_surface_emission(ctx, sp, hit, strategy, prev_delta, prev_bsdf_pdf, prev_p, connection_factor);
 }
 
 

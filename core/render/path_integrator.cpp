@@ -1,5 +1,6 @@
 #include "core/render/path_integrator.h"
 
+#include "core/render/light_connection.h"
 #include "core/render/light_transport.h"
 #include "core/render/russian_roulette.h"
 
@@ -7,7 +8,9 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 namespace twinray {
@@ -24,6 +27,10 @@ struct PathState {
   // non-delta first vertex when light_traced_caustics is on.
   bool caustic_by_light_tracer = false;
   bool split = false;  // splitting: the path's continuations have been split off (only once per path)
+  // Light connections: at a non-delta vertex behind a non-delta one, connection_factor(...); after its BSDF
+  // sample that times |cos(n, wi)|; 0 elsewhere and without connections (light_connection.h).
+  float connection_factor = 0.0f;
+  bool from_split = false;  // the current ray is one of `splits` continuations of its previous vertex
 };
 
 // Paths still going, compacted after every segment: rays[a] and hits[a] belong to path active[a]. Vertices
@@ -38,9 +45,21 @@ struct ChunkScratch {
   std::array<SurfacePoint, kCapacity> vertex;
   std::array<std::uint16_t, kCapacity> vertex_path;
   std::array<glm::vec2, kCapacity> u_light, u_bsdf;
-  std::array<Ray, kCapacity> shadow_rays;
-  std::array<glm::vec3, kCapacity> shadow_contribution;
-  std::array<std::uint16_t, kCapacity> shadow_owner;
+  // Light connections: each path's light subpaths, traced at its first vertex (their two 2D sampler values,
+  // the ray to the first hit and that hit, in trace order with their path), and per path the emission sample
+  // and the first hit's surface point (`light_vertex_valid`: non-delta, so connections can be made to it).
+  static constexpr std::size_t kLightCapacity = kCapacity * kMaxLightConnections;
+  std::array<glm::vec2, kLightCapacity> u_emit_point, u_emit_dir;
+  std::array<Ray, kLightCapacity> light_rays;
+  std::array<Hit, kLightCapacity> light_hits;
+  std::array<std::uint32_t, kLightCapacity> light_slot;
+  std::array<EmissionSample, kLightCapacity> emission;
+  std::array<SurfacePoint, kLightCapacity> light_vertex;
+  std::array<bool, kLightCapacity> light_vertex_valid;
+  // A segment's shadow rays: a light sample per vertex, and the light connections of the first vertices.
+  std::array<Ray, kCapacity + kLightCapacity> shadow_rays;
+  std::array<glm::vec3, kCapacity + kLightCapacity> shadow_contribution;
+  std::array<std::uint16_t, kCapacity + kLightCapacity> shadow_owner;
   // Splitting: the first non-delta vertices waiting for their continuations, each with its path, the
   // segments that reached it, the path's state and its sampler as they were before its BSDF sample.
   std::array<SurfacePoint, kCapacity> split_vertex;
@@ -51,6 +70,14 @@ struct ChunkScratch {
 };
 
 }  // namespace
+
+PathIntegrator::PathIntegrator(const SceneContext& ctx, const IntegratorSettings& settings)
+    : ctx_(ctx), settings_(settings) {
+  // The connections' weights assume the path tracer's light samples and paths of three segments.
+  const bool applies = settings.strategy == SamplingStrategy::Mis && (settings.max_depth < 0 || settings.max_depth >= 3) &&
+                       ctx.lights != nullptr && ctx.lights->has_surface_lights();
+  settings_.light_connections = applies ? std::min(settings.light_connections, kMaxLightConnections) : 0;
+}
 
 glm::vec3 PathIntegrator::radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters,
                                    FirstHitInfo* first) const {
@@ -99,6 +126,15 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   auto& split_depth = scratch.split_depth;
   auto& split_state = scratch.split_state;
   auto& split_sampler = scratch.split_sampler;
+  auto& u_emit_point = scratch.u_emit_point;
+  auto& u_emit_dir = scratch.u_emit_dir;
+  auto& light_rays = scratch.light_rays;
+  auto& light_hits = scratch.light_hits;
+  auto& light_slot = scratch.light_slot;
+  auto& emission = scratch.emission;
+  auto& light_vertex = scratch.light_vertex;
+  auto& light_vertex_valid = scratch.light_vertex_valid;
+  const std::uint32_t connections = settings_.light_connections;
 
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = glm::vec3(0.0f);
@@ -119,6 +155,8 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
     st.prev_delta = bs.delta;
     st.prev_bsdf_pdf = bs.pdf;
     st.prev_p = sp.p;
+    st.from_split = scale != 1.0f;
+    if (st.connection_factor > 0.0f) st.connection_factor *= std::abs(glm::dot(sp.ng, bs.wi));
     // A continuation's throughput carries the 1/splits of its split: the roulette looks at the throughput the
     // path would have unsplit (its survival scale times splits), or it would kill the continuations early
     // and add back the noise the split took off (docs/rendering.md#path-splitting).
@@ -142,7 +180,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       std::size_t n_vertices = 0;
       for (std::size_t a = 0; a < n_active; ++a) {
         const std::uint16_t i = active[a];
-        const PathState& st = state[i];
+        PathState& st = state[i];
         const Hit& hit = hits[a];
         if (!hit.found()) {
           out[i] += st.throughput * escaped_radiance(ctx_, rays[a].dir, strategy, st.prev_delta, st.prev_bsdf_pdf);
@@ -152,8 +190,15 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         if (depth == 1 && !first.empty()) record_first_hit(&first[i], sp, hit.t);
         // Emission after a delta vertex behind a non-delta first vertex belongs to the light tracer.
         if (sp.geom->emissive && !(st.caustic_by_light_tracer && st.prev_delta))
-          out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p);
+          out[i] += st.throughput * surface_emission(ctx_, sp, hit, strategy, st.prev_delta, st.prev_bsdf_pdf, st.prev_p,
+                                                     st.connection_factor);
         if (last_segment || sp.bsdf().is_black()) continue;
+        // A non-delta vertex behind a non-delta one that made light connections: the paths through it compete
+        // with those connections (light_connection.h).
+        st.connection_factor =
+            connections > 0 && !st.prev_delta && !sp.bsdf().is_delta() && depth - 1 <= kLightConnectionMaxDepth
+                ? connection_factor(connections, st.from_split ? splits : 1u, st.prev_p, st.prev_bsdf_pdf, sp.p, sp.ng, rays[a].dir)
+                : 0.0f;
         vertex[n_vertices] = sp;
         vertex_path[n_vertices] = i;
         ++n_vertices;
@@ -163,13 +208,22 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       // that every vertex takes the same dimensions), the BSDF sample (2D), the roulette (1D, only once it
       // plays). A vertex that is split keeps its path's sampler as it is after the light sample: each
       // continuation draws the BSDF sample and everything after from its own Sampler::split.
+      // With light connections, a first vertex draws its light subpaths' values (a 2D pair each) after its
+      // light sample.
       const auto splits_at = [&](std::size_t v) {
         return splits > 1 && !state[vertex_path[v]].split && !vertex[v].bsdf().is_delta();
       };
+      const bool trace_light = connections > 0 && depth == 1;
       for (std::size_t v = 0; v < n_vertices; ++v) {
         const std::uint16_t i = vertex_path[v];
         Sampler& sampler = samples[i].sampler;
         u_light[v] = sampler.next_2d();
+        if (trace_light) {
+          for (std::uint32_t m = 0; m < connections; ++m) {
+            u_emit_point[v * connections + m] = sampler.next_2d();
+            u_emit_dir[v * connections + m] = sampler.next_2d();
+          }
+        }
         if (splits_at(v)) split_sampler[i].emplace(sampler);
         u_bsdf[v] = sampler.next_2d();
       }
@@ -179,12 +233,69 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
       for (std::size_t v = 0; v < n_vertices; ++v) {
         if (vertex[v].bsdf().is_delta()) continue;
         ShadowQuery q;
-        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q)) continue;
         const std::uint16_t i = vertex_path[v];
+        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q, state[i].connection_factor))
+          continue;
         shadow_rays[n_shadow] = q.ray;
         shadow_contribution[n_shadow] = state[i].throughput * q.contribution;
         shadow_owner[n_shadow] = i;
         ++n_shadow;
+      }
+
+      // Light subpaths, traced at the first vertices: the emission samples, then their rays to the first hits.
+      if (trace_light) {
+        std::size_t n_light = 0;
+        for (std::size_t v = 0; v < n_vertices; ++v) {
+          const std::uint16_t i = vertex_path[v];
+          for (std::uint32_t m = 0; m < connections; ++m) {
+            const std::size_t slot = i * connections + m;
+            light_vertex_valid[slot] = false;
+            EmissionSample& es = emission[slot];
+            if (!ctx_.lights->sample_emission(u_emit_point[v * connections + m], u_emit_dir[v * connections + m], es))
+              continue;
+            Ray& r = light_rays[n_light];
+            r.org = offset_ray_origin(es.point, es.normal, es.error_scale);
+            r.dir = es.dir;
+            r.tmin = 0.0f;
+            r.tmax = std::numeric_limits<float>::infinity();
+            light_slot[n_light] = static_cast<std::uint32_t>(slot);
+            ++n_light;
+          }
+        }
+        counters.closest_hit_rays += n_light;
+        for (std::size_t l = 0; l < n_light; ++l)
+          ctx_.backend->intersect_ids(light_rays[l], light_hits[l], counters.query_stats());
+        for (std::size_t l = 0; l < n_light; ++l) {
+          const Hit& hit = light_hits[l];
+          if (!hit.found()) continue;
+          const GeomShading& g = ctx_.geoms[hit.geom_id];
+          if (g.bsdf.is_delta() || g.bsdf.is_black()) continue;
+          light_vertex[light_slot[l]] = make_surface_point(ctx_, light_rays[l], hit);
+          light_vertex_valid[light_slot[l]] = true;
+        }
+      }
+
+      // Light connections at the non-delta vertices: a shadow ray to each of the path's light vertices (after
+      // the vertices' light samples, as alone). A connection at the vertex reached by `depth` segments makes
+      // paths of depth + 2.
+      if (connections > 0 && depth <= kLightConnectionMaxDepth && (settings_.max_depth < 0 || depth + 2 <= settings_.max_depth)) {
+        for (std::size_t v = 0; v < n_vertices; ++v) {
+          if (vertex[v].bsdf().is_delta()) continue;
+          const std::uint16_t i = vertex_path[v];
+          const std::uint32_t pt_count = splits_at(v) ? splits : 1u;
+          for (std::uint32_t m = 0; m < connections; ++m) {
+            const std::size_t slot = i * connections + m;
+            if (!light_vertex_valid[slot]) continue;
+            ShadowQuery q;
+            if (!prepare_light_connection(ctx_, vertex[v], state[i].throughput, emission[slot], light_vertex[slot],
+                                          connections, pt_count, q))
+              continue;
+            shadow_rays[n_shadow] = q.ray;
+            shadow_contribution[n_shadow] = q.contribution;
+            shadow_owner[n_shadow] = i;
+            ++n_shadow;
+          }
+        }
       }
 
       // BSDF samples, roulette, the next segment's rays.

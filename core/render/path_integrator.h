@@ -9,7 +9,10 @@
 // after a delta vertex by a path whose first vertex is non-delta is left to the light tracer
 // (core/render/light_tracer.h), which counts those caustic paths instead. With splits > 1 a path continues
 // `splits` times from its first non-delta vertex, each continuation with 1/splits of the throughput, its own
-// Sampler::split and a roulette on the unsplit throughput (docs/rendering.md#path-splitting).
+// Sampler::split and a roulette on the unsplit throughput (docs/rendering.md#path-splitting). With
+// light_connections > 0 each camera sample also traces light subpaths of one segment and joins its non-delta
+// vertices up to kLightConnectionMaxDepth segments deep to their hits: a third strategy for the paths whose
+// last two vertices are a diffuse bounce and the light (core/render/light_connection.h).
 //
 // Wavefront: the paths of a batch (one sample of each pixel of a tile) advance together, one segment at a
 // time: all their rays are traced, then every path is shaded (emission, light sample, BSDF sample,
@@ -28,7 +31,9 @@ namespace twinray {
 
 class PathIntegrator final : public Integrator {
  public:
-  PathIntegrator(const SceneContext& ctx, const IntegratorSettings& settings) : ctx_(ctx), settings_(settings) {}
+  // Light connections are kept only where they apply (IntegratorSettings::light_connections), at most
+  // kMaxLightConnections.
+  PathIntegrator(const SceneContext& ctx, const IntegratorSettings& settings);
   IntegratorKind kind() const override { return IntegratorKind::Path; }
   glm::vec3 radiance(const Ray& camera_ray, Sampler& sampler, TraceCounters& counters, FirstHitInfo* first) const override;
   void radiance(std::span<CameraSample> samples, std::span<glm::vec3> out, std::span<FirstHitInfo> first,

@@ -87,6 +87,7 @@ RendererResult render_twinray_batches(const Scene& scene, const CompareSettings&
     ro.settings.rr_depth = settings.rr_depth;
     ro.caustics = settings.caustics;
     ro.settings.splits = settings.splits;
+    ro.settings.light_connections = settings.light_connections;
     ro.spp = spp;
     ro.time_budget_seconds = settings.time_seconds > 0.0 ? settings.time_seconds / batches : 0.0;
     ro.seed = settings.seed + static_cast<std::uint64_t>(b);
@@ -118,7 +119,8 @@ RendererResult render_twinray_batches(const Scene& scene, const CompareSettings&
   }
   r.means = channel_means(r.image);
   r.extra = {{"backend", settings.backend}, {"nonfinite_samples", nonfinite}, {"caustics", to_string(settings.caustics)},
-             {"splits", settings.splits}};
+             {"splits", settings.splits},
+             {"light_connections", settings.light_connections}};
   return r;
 }
 

@@ -37,6 +37,7 @@ struct CompareSettings {
   int rr_depth = 5;
   CausticsMode caustics = CausticsMode::Auto;  // twinray's caustic light tracer (core/render/renderer.h)
   std::uint32_t splits = IntegratorSettings{}.splits;  // twinray's path splitting (core/render/integrator.h)
+  std::uint32_t light_connections = IntegratorSettings{}.light_connections;  // twinray's light connections (same)
   std::string mitsuba_variant = "auto";
   std::filesystem::path reference; // optional: relMSE of both against it
   std::filesystem::path out;       // output folder
