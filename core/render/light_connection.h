@@ -82,13 +82,7 @@ inline bool prepare_light_connection(const SceneContext& ctx, const SurfacePoint
   Ray& shadow = out.ray;
   shadow.org = offset_ray_origin(x1.p, glm::dot(to_x2, x1.ng) > 0.0f ? x1.ng : -x1.ng, x1.error_scale);
   const glm::vec3 target = offset_ray_origin(x2.p, glm::dot(to_x2, x2.ng) < 0.0f ? x2.ng : -x2.ng, x2.error_scale);
-  const glm::vec3 s = target - shadow.org;
-  const float s2 = glm::dot(s, s);
-  if (!(s2 > 0.0f)) return false;
-  const float inv_s = 1.0f / std::sqrt(s2);
-  shadow.dir = s * inv_s;
-  shadow.tmin = 0.0f;
-  shadow.tmax = s2 * inv_s * (1.0f - kShadowRayShortening);
+  if (!aim_shadow_ray(shadow, target)) return false;
   out.contribution = beta_camera * f1 * f2 * emission.weight * (weight / (dist2 * static_cast<float>(connections)));
   return std::isfinite(out.contribution.x) && std::isfinite(out.contribution.y) && std::isfinite(out.contribution.z);
 }

@@ -104,6 +104,20 @@ struct ShadowQuery {
   glm::vec3 contribution{0.0f};  // BSDF * radiance / pdf, MIS weighted
 };
 
+// Aims `shadow`, whose origin is set, at `target` (both already offset off their surfaces): unit direction, and
+// tmax short of the target by kShadowRayShortening so that the far end's own surface is not hit. False when
+// the two points coincide (nothing to trace).
+inline bool aim_shadow_ray(Ray& shadow, const glm::vec3& target) {
+  const glm::vec3 d = target - shadow.org;
+  const float dist2 = glm::dot(d, d);
+  if (!(dist2 > 0.0f)) return false;
+  const float inv_dist = 1.0f / std::sqrt(dist2);
+  shadow.dir = d * inv_dist;
+  shadow.tmin = 0.0f;
+  shadow.tmax = dist2 * inv_dist * (1.0f - kShadowRayShortening);
+  return true;
+}
+
 // One light sample at a non-delta surface point, up to its shadow ray: false when the sample cannot
 // contribute (nothing to trace). The contribution is BSDF * radiance / pdf, MIS weighted against BSDF
 // sampling for the Mis strategy. `u` is the sampler's 2D value for the light choice and the point on it.
@@ -128,13 +142,7 @@ struct ShadowQuery {
     shadow.org = offset_ray_origin(sp.p, glm::dot(ls.wi, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
     const glm::vec3 target =
         offset_ray_origin(ls.point, glm::dot(ls.wi, ls.normal) < 0.0f ? ls.normal : -ls.normal);
-    const glm::vec3 d = target - shadow.org;
-    const float dist2 = glm::dot(d, d);
-    if (!(dist2 > 0.0f)) return false;
-    const float inv_dist = 1.0f / std::sqrt(dist2);
-    shadow.dir = d * inv_dist;
-    shadow.tmin = 0.0f;
-    shadow.tmax = dist2 * inv_dist * (1.0f - kShadowRayShortening);
+    if (!aim_shadow_ray(shadow, target)) return false;
   }
   float weight = 1.0f;
   if (strategy == SamplingStrategy::Mis) {

@@ -393,6 +393,17 @@ struct Primitive {
   }
 #endif
 
+  // The sphere's answer for a root t in the ray's interval.
+  Trace sphere_hit(double t) const {
+    Trace tr;
+    tr.hit = true;
+    tr.t = t;
+    tr.geom = sphere->geom_id;
+    tr.prim = 0;
+    tr.primitive = this;
+    return tr;
+  }
+
   // Both roots of |o + t d - c| = r with the discriminant taken from the closest-approach vector (no
   // cancellation for far spheres) and the near root through Vieta (no cancellation for huge ones).
 #if BUG(47)
@@ -411,16 +422,8 @@ struct Primitive {
     const float disc = b * b - 4.0f * a * c;
     if (disc < 0.0f) return tr;
     const float root = std::sqrt(disc);
-    for (const float t : {(-b - root) / (2.0f * a), (-b + root) / (2.0f * a)}) {
-      if (t >= lowest_t(ray) && t <= tmax) {
-        tr.hit = true;
-        tr.t = t;
-        tr.geom = sphere->geom_id;
-        tr.prim = 0;
-        tr.primitive = this;
-        return tr;
-      }
-    }
+    for (const float t : {(-b - root) / (2.0f * a), (-b + root) / (2.0f * a)})
+      if (t >= lowest_t(ray) && t <= tmax) return sphere_hit(t);
     return tr;
   }
 #else
@@ -444,14 +447,7 @@ struct Primitive {
     for (const double root : {std::min(r0, r1), std::max(r0, r1)}) {
 #endif
       const double t = static_cast<float>(root);
-      if (t >= lowest_t(ray) && t <= tmax) {
-        tr.hit = true;
-        tr.t = t;
-        tr.geom = sphere->geom_id;
-        tr.prim = 0;
-        tr.primitive = this;
-        return tr;
-      }
+      if (t >= lowest_t(ray) && t <= tmax) return sphere_hit(t);
     }
     return tr;
   }
