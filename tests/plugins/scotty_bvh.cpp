@@ -778,6 +778,18 @@ class BVH {
     double best_cost = static_cast<double>(size) * box.surface_area();  // cost of a leaf
     int best_axis = -1;
     double best_split = 0.0;
+    // The SAH cost of a split into two non-empty sides; the cheapest so far is kept.
+    const auto consider = [&](int axis, double plane, const BBox& left, std::size_t nl, const BBox& right,
+                              std::size_t nr) {
+      if (nl == 0 || nr == 0) return;
+      const double cost = box.surface_area() + static_cast<double>(nl) * left.surface_area() +
+                          static_cast<double>(nr) * right.surface_area();
+      if (cost < best_cost) {
+        best_cost = cost;
+        best_axis = axis;
+        best_split = plane;
+      }
+    };
 #if BUG(27)
     // One axis, at random: "random splits are good enough"
     static std::uint64_t state = static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count()) | 1;
@@ -805,14 +817,7 @@ class BVH {
             (goes_left ? left : right).enclose(b);
             (goes_left ? nl : nr) += 1;
           }
-          if (nl == 0 || nr == 0) continue;
-          const double cost = box.surface_area() + static_cast<double>(nl) * left.surface_area() +
-                              static_cast<double>(nr) * right.surface_area();
-          if (cost < best_cost) {
-            best_cost = cost;
-            best_axis = axis;
-            best_split = plane;
-          }
+          consider(axis, plane, left, nl, right, nr);
         }
         continue;
 #endif
@@ -834,14 +839,7 @@ class BVH {
             (k < split ? left : right).enclose(buckets[k]);
             (k < split ? nl : nr) += counts[k];
           }
-          if (nl == 0 || nr == 0) continue;
-          const double cost = box.surface_area() + static_cast<double>(nl) * left.surface_area() +
-                              static_cast<double>(nr) * right.surface_area();
-          if (cost < best_cost) {
-            best_cost = cost;
-            best_axis = axis;
-            best_split = lo + extent * static_cast<double>(split) / static_cast<double>(kBuckets);
-          }
+          consider(axis, lo + extent * static_cast<double>(split) / static_cast<double>(kBuckets), left, nl, right, nr);
         }
       }
     }
