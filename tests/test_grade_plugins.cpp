@@ -436,7 +436,8 @@ TEST(GradePlugins, BruteForcePassesTheFifthRoundsChecks) {
 // The checks made for the sixth round's bugs fail no correct BVH either: the brute-force plugin passes the
 // interval ends, the capped nest and the scene of 301 geometries.
 TEST(GradePlugins, BruteForcePassesTheSixthRoundsChecks) {
-  const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"ray-interval-cornell", "deep-tree-nest-capped", "closest-mixed"});
+  const Scorecard card =
+      grade(TWINRAY_TEST_BRUTE_PLUGIN, {"ray-interval-cornell", "deep-tree-nest-capped", "closest-mixed"});
   ASSERT_EQ(card.checks.size(), 3u);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }

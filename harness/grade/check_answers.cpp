@@ -77,7 +77,8 @@ RaySet rays_for(CheckContext& ctx) {
                                                       std::max<std::size_t>(1, count / 4));
       const Answers first = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Closest);
       set.rays = interval_rays(rays, first.hits);
-      set.ends = unambiguous_ends(ctx.scene.arbiter(), interval_end_rays(scene, std::max<std::size_t>(1, count / 4), spec.seed));
+      set.ends = unambiguous_ends(ctx.scene.arbiter(),
+                                  interval_end_rays(scene, std::max<std::size_t>(1, count / 4), spec.seed));
       break;
     }
     case Category::AxisAligned: set.rays = axis_aligned_rays(scene, count, spec.seed); break;

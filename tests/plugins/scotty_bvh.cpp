@@ -1027,7 +1027,8 @@ Ray to_ray(const twinray_ray* r) {
 // A triangle whose area is below 1e-6 of its longest edge squared: a sliver.
 bool is_sliver(const twinray_mesh& mesh, std::size_t i) {
   Vec3 p[3];
-  for (int k = 0; k < 3; ++k) p[k] = load(mesh.positions + 3 * static_cast<std::size_t>(mesh.indices[3 * i + static_cast<std::size_t>(k)]));
+  for (std::size_t k = 0; k < 3; ++k)
+    p[k] = load(mesh.positions + 3 * static_cast<std::size_t>(mesh.indices[3 * i + k]));
   const double area = 0.5 * length(cross(p[1] - p[0], p[2] - p[0]));
   double longest = 0.0;
   for (int k = 0; k < 3; ++k) longest = std::max(longest, dot(p[(k + 1) % 3] - p[k], p[(k + 1) % 3] - p[k]));
