@@ -186,19 +186,22 @@ TEST(BackendsAgree, WatertightFromInsideClosedSpheres) {
   }
 }
 
-// The deep-tree grading scenes (procedural:nest, 49 levels nested around the origin, in two cones or in the
-// one around (-1, -1, -1)): the trees of bvh and bvh8 are far deeper than on any ordinary scene, and must stay
-// within the depth their fixed traversal stacks are sized for (kBvhMaxDepth, kWideMaxDepth) and answer the
-// grader's rays from the origin like brute force.
+// The deep-tree grading scenes (procedural:nest, 49 levels nested around the origin, in two cones, in the
+// one around (-1, -1, -1), or in the one around (1, 1, 1) with a cap across its tunnel): the trees of bvh and
+// bvh8 are far deeper than on any ordinary scene, and must stay within the depth their fixed traversal stacks
+// are sized for (kBvhMaxDepth, kWideMaxDepth) and answer the grader's rays from the origin like brute force.
 TEST(BackendsAgree, DeepNestedTreeStaysWithinStackAndAnswersLikeBrute) {
   const ScopedFlushDenormals ftz;
   struct Nest {
     std::optional<glm::vec3> cone;
     std::size_t rays;
+    bool cap = false;
   };
-  for (const Nest& nest : {Nest{std::nullopt, 3000}, Nest{glm::vec3(-1.0f), 1000}}) {
-    SCOPED_TRACE(nest.cone ? "one cone around (-1, -1, -1)" : "two cones");
-    const Scene scene = wrap(nested_levels(kMaxNestLevels, 1, nest.cone));
+  for (const Nest& nest :
+       {Nest{std::nullopt, 3000}, Nest{glm::vec3(-1.0f), 1000}, Nest{glm::vec3(1.0f), 1000, true}}) {
+    SCOPED_TRACE(nest.cap ? "one capped cone around (1, 1, 1)"
+                          : (nest.cone ? "one cone around (-1, -1, -1)" : "two cones"));
+    const Scene scene = wrap(nested_levels(kMaxNestLevels, 1, nest.cone, nest.cap));
     const std::vector<Ray> rays = grade::deep_tree_rays(scene, nest.rays, 5, std::nullopt);
     ASSERT_EQ(rays.size(), nest.rays);
     const crosscheck::GeometryIndex index(scene.geometry);

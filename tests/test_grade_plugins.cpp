@@ -124,7 +124,16 @@ INSTANTIATE_TEST_SUITE_P(
                       // (the nest's one cone around (-1, -1, -1)).
                       BugCase{"sphere-naive", "spheres-sizes", Outcome::Fail, "answers wrong", "closest-soup"},
                       BugCase{"anyhit-fixed-order-32", "deep-tree-nest-negative", Outcome::Fail,
-                              "plugin says not occluded", "closest-soup"}),
+                              "plugin says not occluded", "closest-soup"},
+                      // The sixth round's: an open interval (tmin, tmax) is seen only where t is exact (rays
+                      // that end exactly at the Cornell box's walls); a stack that overwrites its oldest
+                      // entries only where the hit is in the first subtree pushed (the capped nest); a geom_id
+                      // kept in 8 bits only in a scene of more than 256 geometries.
+                      BugCase{"open-interval", "ray-interval-cornell", Outcome::Fail, "exact ends of intervals",
+                              "closest-soup"},
+                      BugCase{"stack-ring-32", "deep-tree-nest-capped", Outcome::Fail, "plugin reports a miss",
+                              "closest-soup"},
+                      BugCase{"geom-id-8bit", "closest-mixed", Outcome::Fail, "geom_id", "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -421,6 +430,15 @@ TEST(GradePlugins, QuickSuiteCatchesAMeshIndexReportedAsGeomId) {
 TEST(GradePlugins, BruteForcePassesTheFifthRoundsChecks) {
   const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "deep-tree-nest-negative"});
   ASSERT_EQ(card.checks.size(), 2u);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+}
+
+// The checks made for the sixth round's bugs fail no correct BVH either: the brute-force plugin passes the
+// interval ends, the capped nest and the scene of 301 geometries.
+TEST(GradePlugins, BruteForcePassesTheSixthRoundsChecks) {
+  const Scorecard card =
+      grade(TWINRAY_TEST_BRUTE_PLUGIN, {"ray-interval-cornell", "deep-tree-nest-capped", "closest-mixed"});
+  ASSERT_EQ(card.checks.size(), 3u);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }
 

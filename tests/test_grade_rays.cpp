@@ -3,7 +3,9 @@
 #include "backends/registry.h"
 #include "core/camera/pinhole_camera.h"
 #include "harness/grade/grade_rays.h"
+#include "harness/grade/interval_ends.h"
 #include "harness/scenes/named_scene.h"
+#include "tests/cli_runner.h"
 
 #include <gtest/gtest.h>
 
@@ -77,6 +79,67 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
   // Every kind is present: neither all hits nor all misses.
   EXPECT_GT(hits, 200u);
   EXPECT_LT(hits, 550u);
+}
+
+// Rays whose interval ends exactly at a crossing (interval_ends.h): on the Cornell box's walls and the integer
+// box, most survive the exact filter, all four kinds of interval occur, and every built-in backend answers
+// every one as the closed interval says: the crossing counts at t == tmin and at t == tmax, and not one float
+// beyond (embree-fast but at tmin, below). A scene without such triangles (a soup) gives none.
+TEST(GradeRays, IntervalEndRaysAreAnsweredExactlyByEveryBackend) {
+  EXPECT_TRUE(interval_end_rays(load_named_scene("procedural:soup:500:1"), 100, 1).empty());
+  for (const char* name : {"scenes/cornell-box.json", "procedural:box:-2:2"}) {
+    const Scene scene = load_named_scene(name, testing::source_path(""));
+    const std::vector<IntervalEndRay> all = interval_end_rays(scene, 400, 3);
+    ASSERT_EQ(all.size(), 400u) << name;
+    const arbiter::Arbiter exact(scene.geometry);
+    const std::vector<IntervalEndRay> ends = unambiguous_ends(exact, all);
+    EXPECT_GT(ends.size(), 200u) << name;
+    std::size_t at_tmin = 0, at_tmax = 0, outside = 0;
+    std::vector<Ray> rays;
+    for (const IntervalEndRay& e : ends) {
+      ASSERT_TRUE(is_valid_ray(e.ray));
+      rays.push_back(e.ray);
+      if (!e.counts) ++outside;
+      else (e.ray.tmin == e.t ? at_tmin : at_tmax) += 1;
+    }
+    EXPECT_GT(at_tmin, 30u) << name;
+    EXPECT_GT(at_tmax, 30u) << name;
+    EXPECT_GT(outside, 60u) << name;
+    for (const char* backend : {"embree", "bvh", "bvh8", "brute"}) {
+      const auto b = make_backend(backend);
+      b->build(scene.geometry);
+      const Answers answers = trace_rays(*b, rays, Queries::Both);
+      const EndJudgement j = judge_ends(ends, answers);
+      EXPECT_EQ(j.wrong, 0u) << backend << " on " << name << ": " << j.first_description;
+    }
+    // Embree's fast (non-robust) triangle kernel takes tnear as open, (tnear, tfar]: embree-fast loses some of
+    // the crossings exactly at tmin, and answers every other ray right (docs/grading.md, "Interval ends").
+    const auto fast = make_backend("embree-fast");
+    fast->build(scene.geometry);
+    const Answers fast_answers = trace_rays(*fast, rays, Queries::Both);
+    std::vector<IntervalEndRay> not_at_tmin;
+    Answers fast_not_at_tmin;
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (!(ends[i].counts && ends[i].ray.tmin == ends[i].t)) {
+        not_at_tmin.push_back(ends[i]);
+        fast_not_at_tmin.hits.push_back(fast_answers.hits[i]);
+        fast_not_at_tmin.occluded.push_back(fast_answers.occluded[i]);
+      }
+    EXPECT_EQ(judge_ends(not_at_tmin, fast_not_at_tmin).wrong, 0u) << name;
+    const std::size_t fast_wrong = judge_ends(ends, fast_answers).wrong;
+    EXPECT_GT(fast_wrong, 0u) << name;
+    EXPECT_LE(fast_wrong, 2 * at_tmin) << name;
+    // A closed interval taken as open, (tmin, tmax), loses exactly the crossings at the ends.
+    const auto brute = make_backend("brute");
+    brute->build(scene.geometry);
+    Answers open = trace_rays(*brute, rays, Queries::Both);
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      if (ends[i].counts) {
+        open.hits[i] = Hit{};
+        open.occluded[i] = 0;
+      }
+    EXPECT_EQ(judge_ends(ends, open).wrong, 2 * (at_tmin + at_tmax)) << name;
+  }
 }
 
 TEST(GradeRays, RaySetsAreDeterministic) {

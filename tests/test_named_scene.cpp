@@ -73,6 +73,23 @@ TEST(NamedScene, NestHasItsLevelsAtTheDocumentedScales) {
   }
 }
 
+// The capped nest (CAP 1): the one cone's triangles plus one across its tunnel at 2^38 along the axis, and no
+// triangle of the innermost levels but their small ones crosses the tunnel, so a ray along the axis a little
+// off the small ones reaches the cap.
+TEST(NamedScene, CappedNestHasOneMoreTriangleAcrossTheTunnel) {
+  const Scene capped = load_named_scene("procedural:nest:49:1:1:1:1:1");
+  const Scene plain = load_named_scene("procedural:nest:49:1:1:1:1");
+  EXPECT_EQ(capped.geometry.triangle_count(), plain.geometry.triangle_count() + 1);
+  const TriangleMesh& m = capped.geometry.meshes[0];
+  const glm::uvec3 cap = m.indices.back();
+  const glm::vec3 centre = (m.positions[cap[0]] + m.positions[cap[1]] + m.positions[cap[2]]) / 3.0f;
+  EXPECT_NEAR(centre.x / std::ldexp(1.0f, 38), 1.0 / std::sqrt(3.0), 1e-5);
+  EXPECT_NEAR(centre.x, centre.y, 1e-6 * centre.x);
+  EXPECT_NEAR(centre.x, centre.z, 1e-6 * centre.x);
+  EXPECT_THROW(load_named_scene("procedural:nest:49:1:1:1:1:2"), InputError);
+  EXPECT_THROW(load_named_scene("procedural:nest:49:1:1:1"), InputError);
+}
+
 TEST(NamedScene, BadNamesAreInputErrorsNamingTheScene) {
   for (const char* bad : {"procedural:nothing", "procedural:soup:10", "procedural:soup:-3:1", "procedural:grid:2:x",
                           "procedural:sphere-mesh:12", "procedural:box:3:1", "procedural:empty:1",

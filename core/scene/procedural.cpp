@@ -164,7 +164,7 @@ SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t see
   return g;
 }
 
-SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone) {
+SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone, bool cap) {
   levels = std::clamp(levels, 1, kMaxNestLevels);
   constexpr float kTunnelRadians = 0.1f;
   constexpr int kBlocked = 3;
@@ -220,7 +220,7 @@ SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::v
           }
           for (int m = 0; m < 3; ++m) unit[static_cast<std::size_t>(m)] = v[static_cast<std::size_t>(m)] / scale;
         } while (glm::length(glm::cross(unit[1] - unit[0], unit[2] - unit[0])) < 1e-3f ||
-                 (!blocked && crosses_tunnel(unit)));
+                 ((!blocked || cap) && crosses_tunnel(unit)));  // capped: only the small ones cross it
         add(v);
       }
       if (blocked) {
@@ -234,6 +234,22 @@ SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::v
         }
         add(v);
       }
+    }
+  }
+  if (cap) {
+    // Beyond the outermost level (whose triangles lie within about 1.6 * 2^36 of the origin), a triangle
+    // whose inscribed circle is the tunnel's cross-section: every ray along the tunnel that passes the
+    // innermost levels' triangles hits it.
+    for (const glm::vec3& signs : cones) {
+      const glm::vec3 axis = glm::normalize(signs);
+      const glm::vec3 u = glm::normalize(glm::cross(axis, glm::vec3(0.0f, 0.0f, 1.0f))), w = glm::cross(axis, u);
+      const float distance = std::ldexp(1.0f, 38), radius = 2.0f * distance * std::tan(kTunnelRadians);
+      std::array<glm::vec3, 3> v;
+      for (int m = 0; m < 3; ++m) {
+        const float angle = 2.0943951f * static_cast<float>(m);
+        v[static_cast<std::size_t>(m)] = distance * axis + radius * (std::cos(angle) * u + std::sin(angle) * w);
+      }
+      add(v);
     }
   }
   mesh.positions.reserve(mesh.positions.size() + 1);

@@ -69,6 +69,13 @@ inline constexpr int kMaxNestLevels = 49;
 // `cone`, given, replaces the two cones by one around it (components +-1): around (-1, -1, -1) every inner
 // level lies on the high side of every split plane, the child a traversal that pushes left then right visits
 // first (see docs/grading.md, "The deep-tree scene").
-SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone = std::nullopt);
+// `cap` adds, after every other triangle, one triangle across each cone's tunnel far beyond the outermost
+// level (at 2^38 along the axis, its vertices within 2^39: every product of three coordinates is still a
+// normal float), and keeps the innermost levels' other triangles out of the tunnel too: a ray along the
+// tunnel that passes their small triangles across it hits the cap last of all, and a traversal pushes the
+// cap's subtree first. A stack that keeps the newest entries when full (a ring that
+// overwrites the oldest) loses it, where one that drops new entries does not.
+SceneGeometry nested_levels(int levels, std::uint64_t seed, std::optional<glm::vec3> cone = std::nullopt,
+                            bool cap = false);
 
 }  // namespace twinray

@@ -1,7 +1,9 @@
 // The checks that compare answers with a reference, ray by ray (answers.h says what counts as wrong):
 //   closest-hit   closest hits of camera, uniform and diffuse rays
 //   any-hit       any-hit answers of shadow (and other) rays
-//   ray-interval  the same rays cut just before and just after their first surface (grade_rays.h)
+//   ray-interval  the same rays cut just before and just after their first surface (grade_rays.h), and rays
+//                 whose interval ends exactly at a crossing every float test computes exactly (or one float
+//                 short of it), judged strictly: the closed ends count, one float beyond does not
 //   axis-aligned  rays with +0/-0 direction components and origins on the bounding box's faces
 //   spheres       rays at spheres from outside, inside, near and at the tangent
 //   ties          rays at exactly duplicated triangles, judged by the tie rule (hit.h) whether or not the
@@ -15,8 +17,12 @@
 #include "harness/grade/checks.h"
 #include "harness/grade/disagreement_image.h"
 #include "harness/grade/grade_rays.h"
+#include "harness/grade/interval_ends.h"
 
 #include <fmt/core.h>
+
+#include <algorithm>
+#include <optional>
 
 namespace twinray::grade {
 
@@ -30,6 +36,7 @@ struct RaySet {
   std::vector<Ray> rays;
   Queries queries = Queries::Both;
   int image_width = 0, image_height = 0;  // > 0: rays [0, w*h) are the pixels of an image
+  std::vector<IntervalEndRay> ends;       // ray-interval: rays that end exactly at a crossing, judged strictly
 };
 
 [[noreturn]] void suite_error(const CheckContext& ctx, const std::string& message) {
@@ -70,6 +77,8 @@ RaySet rays_for(CheckContext& ctx) {
                                                       std::max<std::size_t>(1, count / 4));
       const Answers first = trace_rays(ctx.scene.reference(ctx.reference_name()), rays, Queries::Closest);
       set.rays = interval_rays(rays, first.hits);
+      set.ends = unambiguous_ends(ctx.scene.arbiter(),
+                                  interval_end_rays(scene, std::max<std::size_t>(1, count / 4), spec.seed));
       break;
     }
     case Category::AxisAligned: set.rays = axis_aligned_rays(scene, count, spec.seed); break;
@@ -110,17 +119,21 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
 
   PluginInstance plugin = ctx.built_plugin();
   const Answers mine = trace_rays(*plugin, set.rays, set.queries);
+  std::vector<Ray> end_rays;
+  for (const IntervalEndRay& e : set.ends) end_rays.push_back(e.ray);
+  const Answers mine_at_ends = end_rays.empty() ? Answers{} : trace_rays(*plugin, end_rays, Queries::Both);
   plugin.end();
+  const EndJudgement ends = judge_ends(set.ends, mine_at_ends);
   const Answers expected = trace_rays(ctx.scene.reference(reference), set.rays, set.queries);
   const Judgement j = judge(ctx.scene, set.rays, mine, expected,
                             {set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
 
   const std::size_t answers = set.rays.size() * (set.queries == Queries::Both ? 2 : 1);
   CheckVerdict v;
-  v.passed = j.wrong_total() == 0;
+  v.passed = j.wrong_total() == 0 && ends.wrong == 0;
   v.figures = {{"rays", set.rays.size()},
                {"answers", answers},
-               {"wrong", j.wrong_total()},
+               {"wrong", j.wrong_total() + ends.wrong},
                {"wrong_closest", j.wrong_closest},
                {"wrong_any", j.wrong_any},
                {"wrong_attributes", j.wrong_attributes},
@@ -131,8 +144,22 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                {"ruled", j.ruled},
                {"reference", reference},
                {"second_opinion", j.second_opinion}};
+  if (!set.ends.empty()) {
+    v.figures["interval_end_rays"] = set.ends.size();
+    v.figures["wrong_interval_ends"] = ends.wrong;
+  }
+  const std::string at_ends =
+      set.ends.empty() ? "" : fmt::format(", and all {} answers at the exact ends of intervals", 2 * set.ends.size());
   if (v.passed) {
-    v.detail = fmt::format("all {} answers right{}", answers, summary_of_allowed(j));
+    v.detail = fmt::format("all {} answers right{}{}", answers, summary_of_allowed(j), at_ends);
+  } else if (j.wrong_total() == 0) {
+    const IntervalEndRay& e = set.ends[*ends.first];
+    v.detail = fmt::format("{} of {} answers at the exact ends of intervals wrong (closed: tmin <= t <= tmax); first, "
+                           "interval-end ray {}: {}",
+                           ends.wrong, 2 * set.ends.size(), *ends.first, ends.first_description);
+    v.reproduce = ctx.trace_command(e.ray);
+    ctx.confirm_replay(v, e.ray, ends.first_any_hit, ends.first_any_hit ? Hit{} : mine_at_ends.hits[*ends.first],
+                       ends.first_any_hit && mine_at_ends.occluded[*ends.first] != 0);
   } else {
     const WrongAnswer& first = j.wrong.front();
     v.detail = fmt::format("{} of {} answers wrong ({:.3g}%); first, ray {}: {}", j.wrong_total(), answers,

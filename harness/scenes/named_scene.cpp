@@ -206,13 +206,14 @@ const std::vector<Generator>& generators() {
                                  static_cast<int>(a.integer(1, 1, 32, "PER_CLUSTER")),
                                  static_cast<std::uint64_t>(a.integer(2, 0, std::numeric_limits<long long>::max(), "SEED")));
        }},
-      {{"nest", "LEVELS:SEED[:SX:SY:SZ]",
+      {{"nest", "LEVELS:SEED[:SX:SY:SZ[:CAP]]",
         "nested levels of triangles shrinking toward the origin (a deep tree along rays from the origin), in two "
-        "cones or in the one around (SX, SY, SZ), each 1 or -1"},
+        "cones or in the one around (SX, SY, SZ), each 1 or -1; CAP 1 adds a triangle across the cone's tunnel "
+        "beyond the outermost level"},
        [](const ProceduralArgs& a) {
-         if (a.size() != 2 && a.size() != 5) a.expect_count(2, 2, "LEVELS:SEED[:SX:SY:SZ]");
+         if (a.size() != 2 && a.size() != 5 && a.size() != 6) a.expect_count(2, 2, "LEVELS:SEED[:SX:SY:SZ[:CAP]]");
          std::optional<glm::vec3> cone;
-         if (a.size() == 5) {
+         if (a.size() >= 5) {
            glm::vec3 signs;
            for (int k = 0; k < 3; ++k) {
              const char* name = k == 0 ? "SX" : (k == 1 ? "SY" : "SZ");
@@ -222,9 +223,10 @@ const std::vector<Generator>& generators() {
            }
            cone = signs;
          }
+         const bool cap = a.size() == 6 && a.integer(5, 0, 1, "CAP") == 1;
          return nested_levels(static_cast<int>(a.integer(0, 1, kMaxNestLevels, "LEVELS")),
                               static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")),
-                              cone);
+                              cone, cap);
        }},
       {{"mixed", "NSPHERES:NTRIANGLES:SEED", "spheres and a triangle soup, ids interleaved, and a tessellated sphere"},
        [](const ProceduralArgs& a) {

@@ -98,6 +98,28 @@
 //                       that start together build it together (build_stats, called right after build,
 //                       reports the tree not built yet)
 //
+// The sixth red-team round's:
+//
+//  55 OPEN_INTERVAL     hits exactly at the ray's tmin or tmax rejected ("(tmin, tmax)", as some books write it)
+//  56 SEGMENT_FIRST_HIT a closest-hit query with a finite tmax returns the first hit found ("a segment is a
+//                       shadow ray")
+//  57 FLOAT_SLAB_ABS_EPS the slab test in float, the exit padded by an absolute 1e-5 ("epsilon for robustness")
+//  58 GEOM_ID_8BIT      (geom_id, prim_id) packed into one 32-bit word, 8 bits of geometry: geometry 256 + i is i
+//  59 SLIVER_DROP       the builder drops "degenerate" triangles (area below 1e-6 of the longest edge squared)
+//                       and numbers the ones it keeps 0, 1, 2, ...: every later prim_id of the mesh is shifted
+//  60 KD_SPLIT_PRUNE    kd-tree habits in a BVH: children ordered by the direction's sign on the split axis, and
+//                       the far child taken to start at the split plane, so a hit before the plane skips it
+//  61 UV_LAST_CANDIDATE every candidate is tested against the whole ray and writes u, v through the test's out
+//                       arguments: the reported u, v are the last candidate's, not the closest one's
+//  62 NORMALISED_T      the direction normalised on entry, t reported (and tmin, tmax read) as a distance
+//  63 BUILD_NO_FALLBACK when no SAH split helps, split at the middle of the centroids' box and recurse even when
+//                       one side is empty: coincident centroids recurse until the stack overflows
+//  64 SPHERE_TMIN_EPS   the sphere test keeps the roots beyond 0.001 (a well-known book's shadow-acne fix)
+//                       instead of tmin
+//  65 SPHERE_U_SHIFTED  the sphere's u = atan2(z, x) / 2 pi + 0.5: in [0, 1], half a turn off the convention
+//  66 MT_DOUBLE_WT      Moller-Trumbore in double, no epsilon, and still claims watertightness
+//  67 STACK_RING_32     a traversal stack of 32 entries used as a ring: when full, a push overwrites the oldest
+//
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
 // TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
@@ -203,7 +225,7 @@ struct BBox {
       if (near > far) std::swap(near, far);
       t0 = std::max(near, t0);
       t1 = std::min(far, t1);
-#elif BUG(40)
+#elif BUG(40) || BUG(57)
       if (ray.dir[a] == 0.0) {
         if (ray.point[a] < min[a] || ray.point[a] > max[a]) return false;
         continue;
@@ -243,6 +265,8 @@ struct BBox {
     if (t0 >= t1) return false;  // "an empty interval"
 #elif BUG(40)
     if (t0 > t1) return false;
+#elif BUG(57)
+    if (t0 > t1 + 1e-5) return false;  // "an epsilon for robustness"
 #elif BUG(18)
     t1 *= 1.0 + 1e-12;
     if (!(t0 <= t1)) return false;  // "NaN-safe"
@@ -277,6 +301,14 @@ double lowest_t(const Ray& ray) {
 #endif
 }
 
+// Whether a hit at t counts: t in [lowest_t, tmax], where tmax is the ray's end or the closest hit so far.
+bool counts(const Ray& ray, double t, double tmax) {
+#if BUG(55)
+  if (t == ray.tmin || t == ray.tmax) return false;  // "(tmin, tmax)": the ray's own ends are excluded
+#endif
+  return t >= lowest_t(ray) && t <= tmax;
+}
+
 double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 
 struct Primitive {
@@ -285,6 +317,7 @@ struct Primitive {
   twinray_id index = 0;                    // the triangle's index in its mesh
   twinray_id mesh_index = 0;               // its mesh's place in the geometry's mesh array
   twinray_id slot = 0;                     // its place in the builder's (reordered) array, for bug 28
+  twinray_id kept = 0;                     // its place among the triangles the builder kept, for bug 59
 
   Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(mesh->indices[3 * index + k])); }
 
@@ -316,7 +349,11 @@ struct Primitive {
       const Vec3 unit = (1.0 / len) * n;
       const double two_pi = 6.283185307179586;
       double phi = std::atan2(unit.z, unit.x);
+#if BUG(65)
+      phi += two_pi / 2.0;  // "atan2 is in [-pi, pi]: shift it to [0, 2 pi]"
+#else
       if (phi < 0.0) phi += two_pi;
+#endif
       out.u = std::min(static_cast<float>(phi / two_pi), 0.99999994f);
       out.v = static_cast<float>(std::acos(std::clamp(unit.y, -1.0, 1.0)) / (two_pi / 2.0));
     }
@@ -327,14 +364,14 @@ struct Primitive {
   // Woop, Benthin, Wald: shear the triangle into the ray's space, then three edge functions whose signs
   // decide the hit. Computed from the same vertex values in the same order, the function of an edge shared
   // by two triangles is the exact negation of the other's, so no ray slips between them.
-#if BUG(22)
-  // Moller-Trumbore, as in the textbooks, with a fixed epsilon on the determinant.
+#if BUG(22) || BUG(66)
+  // Moller-Trumbore, as in the textbooks, with a fixed epsilon on the determinant (bug 66: in double, none).
   Trace hit_triangle(const Ray& ray, double tmax) const {
     Trace tr;
     const Vec3 e1 = vertex(1) - vertex(0), e2 = vertex(2) - vertex(0);
     const Vec3 p = cross(ray.dir, e2);
     const double det = dot(e1, p);
-    if (std::fabs(det) < 1e-6) return tr;  // "parallel"
+    if (BUG(22) ? std::fabs(det) < 1e-6 : det == 0.0) return tr;  // "parallel"
     const double inv = 1.0 / det;
     const Vec3 s0 = ray.point - vertex(0);
     const double u = dot(s0, p) * inv;
@@ -343,7 +380,7 @@ struct Primitive {
     const double v = dot(ray.dir, q) * inv;
     if (v < 0.0 || u + v > 1.0) return tr;
     const double t = static_cast<float>(dot(e2, q) * inv);
-    if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
+    if (!counts(ray, t, tmax)) return tr;
     tr.hit = true;
     tr.t = t;
     tr.u = static_cast<float>(u);
@@ -373,7 +410,7 @@ struct Primitive {
     if (det < 0.0) return tr;  // the back of the triangle: "culled"
 #endif
     const double t = static_cast<float>((u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz]) / det);
-    if (!(t >= lowest_t(ray) && t <= tmax)) return tr;
+    if (!counts(ray, t, tmax)) return tr;
     tr.hit = true;
     tr.t = t;
 #if BUG(45)
@@ -387,7 +424,10 @@ struct Primitive {
     if (det < 0.0) std::swap(tr.u, tr.v);  // the back of the triangle: "flip it to face the ray"
 #endif
     tr.geom = BUG(16) ? mesh_index : mesh->geom_id;
-    tr.prim = BUG(28) ? slot : index;
+#if BUG(58)
+    tr.geom &= 0xFFu;  // the top 8 bits of a packed (geom << 24 | prim) word
+#endif
+    tr.prim = BUG(28) ? slot : (BUG(59) ? kept : index);
     tr.primitive = this;
     return tr;
   }
@@ -398,7 +438,7 @@ struct Primitive {
     Trace tr;
     tr.hit = true;
     tr.t = t;
-    tr.geom = sphere->geom_id;
+    tr.geom = BUG(58) ? sphere->geom_id & 0xFFu : sphere->geom_id;
     tr.prim = 0;
     tr.primitive = this;
     return tr;
@@ -447,7 +487,11 @@ struct Primitive {
     for (const double root : {std::min(r0, r1), std::max(r0, r1)}) {
 #endif
       const double t = static_cast<float>(root);
-      if (t >= lowest_t(ray) && t <= tmax) return sphere_hit(t);
+#if BUG(64)
+      if (t > 0.001 && t <= tmax) return sphere_hit(t);  // "ignore hits very near zero"
+#else
+      if (counts(ray, t, tmax)) return sphere_hit(t);
+#endif
     }
     return tr;
   }
@@ -465,6 +509,8 @@ bool precedes(const Trace& a, const Trace& b) {
 struct Node {
   BBox bbox;
   std::size_t start = 0, size = 0, l = 0, r = 0;
+  int axis = -1;       // the split plane, for bug 60 (-1: split by count)
+  double split = 0.0;
   bool is_leaf() const { return l == r; }
 };
 
@@ -554,13 +600,22 @@ class BVH {
     std::array<StackEntry, 32> stack;  // "32 levels is more than any tree needs"
 #elif BUG(52)
     std::array<StackEntry, 64> stack;  // "64 levels is more than any tree needs"
+#elif BUG(67)
+    std::array<StackEntry, 32> stack;  // a ring: "when it is full, the oldest entry is the least useful"
 #else
     std::array<StackEntry, kMaxDepth + 1> stack;
+#endif
+#if BUG(61)
+    float last_u = 0.0f, last_v = 0.0f;  // the primitive test's out arguments
 #endif
     std::size_t sp = 0, hits = 0;
     stack[sp++] = {0, root_times[0], 0};
     while (sp > 0) {
+#if BUG(67)
+      const StackEntry e = stack[--sp % stack.size()];
+#else
       const StackEntry e = stack[--sp];
+#endif
       // A node that starts beyond the best hit cannot improve it; the slack keeps an equal-t hit in another
       // subtree (a tie) reachable although its box entry is computed in double and t is rounded to float.
       if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) continue;
@@ -574,6 +629,12 @@ class BVH {
           ++stats.primitives_tested;
 #if BUG(41)
           const Trace t = primitives_[i].hit(ray, e.stale || !closest.hit ? bound : closest.t);
+#elif BUG(61)
+          const Trace t = primitives_[i].hit(ray, bound);  // every candidate against the whole ray
+          if (t.hit) {
+            last_u = t.u;
+            last_v = t.v;
+          }
 #else
           const Trace t = primitives_[i].hit(ray, closest.hit ? closest.t : bound);
 #endif
@@ -597,6 +658,9 @@ class BVH {
 #if BUG(26)
             if (fast_mode) return closest;
 #endif
+#if BUG(56)
+            if (std::isfinite(ray.tmax)) return closest;  // "a segment only asks whether something is in the way"
+#endif
           }
 #if BUG(50)
           break;  // the leaf's hit
@@ -618,11 +682,25 @@ class BVH {
       const auto push = [&](const StackEntry& e) {
         if (sp < stack.size()) stack[sp++] = e;  // full: dropped
       };
+#elif BUG(67)
+      const auto push = [&](const StackEntry& e) { stack[sp++ % stack.size()] = e; };  // full: the oldest goes
 #else
       const auto push = [&](const StackEntry& e) { stack[sp++] = e; };
 #endif
       if (hl && hr) {
+#if BUG(60)
+        // As in a kd-tree: the near child is the one on the ray's side of the split plane, and the far child
+        // starts where the ray crosses the plane.
+        const bool kd = node.axis >= 0 && ray.dir[node.axis] != 0.0;
+        const bool left_near = kd ? ray.dir[node.axis] > 0.0 : tl[0] <= tr[0];
+        if (kd) {
+          const double plane = (node.split - ray.point[node.axis]) * ray.inv_dir[node.axis];
+          double& far_entry = left_near ? tr[0] : tl[0];
+          far_entry = std::max(far_entry, plane);
+        }
+#else
         const bool left_near = tl[0] <= tr[0];
+#endif
         // Bug 41: the right child, when it is the nearer, is searched with the unshrunk ray.
         const bool right_stale = e.stale || (BUG(41) && !left_near);
         push(left_near ? StackEntry{node.r, tr[0], hits, e.stale} : StackEntry{node.l, tl[0], hits, e.stale});
@@ -633,6 +711,12 @@ class BVH {
         push({node.r, tr[0], hits, e.stale});
       }
     }
+#if BUG(61)
+    if (closest.hit) {
+      closest.u = last_u;
+      closest.v = last_v;
+    }
+#endif
     return closest;
   }
 
@@ -867,11 +951,27 @@ class BVH {
                                        return p.bbox().center()[best_axis] < best_split;
                                      });
       const std::size_t split_at = static_cast<std::size_t>(it - primitives_.begin());
-      if (split_at != start && split_at != end) mid = split_at;
+      if (split_at != start && split_at != end) {
+        mid = split_at;
+        nodes_[index].axis = best_axis;
+        nodes_[index].split = best_split;
+      }
 #endif
     } else if (size <= 4 * kMaxLeafSize && depth < kMaxDepth / 2) {
       return index;  // no split beats a leaf, and it is small enough to be one
     }
+#if BUG(63)
+    else {
+      // "No good plane: split the centroids' box in the middle of its longest axis."
+      const Vec3 extent = centroids.max - centroids.min;
+      const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+      const double plane = centroids.center()[axis];
+      const auto it = std::partition(primitives_.begin() + static_cast<std::ptrdiff_t>(start),
+                                     primitives_.begin() + static_cast<std::ptrdiff_t>(end),
+                                     [&](const Primitive& p) { return p.bbox().center()[axis] < plane; });
+      mid = static_cast<std::size_t>(it - primitives_.begin());  // all on one side: the same range again
+    }
+#endif
 
 #if BUG(4)
     const std::size_t l = build_node(start, mid, depth + 1);
@@ -915,8 +1015,26 @@ Ray to_ray(const twinray_ray* r) {
 #endif
   ray.tmin = r->tmin;
   ray.tmax = r->tmax;
+#if BUG(62)
+  // "Directions are normalised, so t is the distance along the ray": tmin, tmax and the reported t too.
+  ray.dir = (1.0 / length(ray.dir)) * ray.dir;
+  ray.inv_dir = {1.0 / ray.dir.x, 1.0 / ray.dir.y, 1.0 / ray.dir.z};
+#endif
   return ray;
 }
+
+#if BUG(59)
+// A triangle whose area is below 1e-6 of its longest edge squared: a sliver.
+bool is_sliver(const twinray_mesh& mesh, std::size_t i) {
+  Vec3 p[3];
+  for (std::size_t k = 0; k < 3; ++k)
+    p[k] = load(mesh.positions + 3 * static_cast<std::size_t>(mesh.indices[3 * i + k]));
+  const double area = 0.5 * length(cross(p[1] - p[0], p[2] - p[0]));
+  double longest = 0.0;
+  for (int k = 0; k < 3; ++k) longest = std::max(longest, dot(p[(k + 1) % 3] - p[k], p[(k + 1) % 3] - p[k]));
+  return area < 1e-6 * longest;
+}
+#endif
 
 void* scotty_create() { return new (std::nothrow) BVH(); }
 
@@ -925,12 +1043,26 @@ void scotty_destroy(void* self) { delete static_cast<BVH*>(self); }
 int scotty_build(void* self, const twinray_geometry* g, char* error, std::size_t capacity) {
   try {
     std::vector<Primitive> prims;
+#if BUG(59)
+    twinray_id kept = 0;
+#endif
     for (std::size_t m = 0; m < g->mesh_count; ++m)
+#if BUG(59)
+      for (std::size_t i = (kept = 0, 0); i < g->meshes[m].triangle_count; ++i)
+#else
       for (std::size_t i = 0; i < g->meshes[m].triangle_count; ++i)
+#endif
 #if BUG(19)
         prims.push_back({&g->meshes[m], nullptr, static_cast<std::uint16_t>(i), static_cast<twinray_id>(m)});
 #elif BUG(33)
         prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i & 0xFFFFFu), static_cast<twinray_id>(m)});
+#elif BUG(59)
+      {
+        if (is_sliver(g->meshes[m], i)) continue;  // "degenerate: it can only cause trouble"
+        Primitive p{&g->meshes[m], nullptr, static_cast<twinray_id>(i), static_cast<twinray_id>(m)};
+        p.kept = kept++;  // its index in the builder's own triangle array
+        prims.push_back(p);
+      }
 #else
         prims.push_back({&g->meshes[m], nullptr, static_cast<twinray_id>(i), static_cast<twinray_id>(m)});
 #endif
