@@ -46,13 +46,43 @@ inline float connection_factor(std::uint32_t connections, std::uint32_t splits, 
   return std::isfinite(f) ? f : 0.0f;
 }
 
-// One light connection: the camera vertex x1 (throughput `beta_camera` up to it), the light subpath's start
-// `emission` and its first hit x2, ready for the shadow ray between x1 and x2. False when it cannot
-// contribute. The contribution is beta_camera f1 |cos1| f2 |cos2| / d12^2 * emission.weight / M, weighted by
-// the power heuristic above (n = `splits`: the path tracer's continuations from x1, M = connections).
-inline bool prepare_light_connection(const SceneContext& ctx, const SurfacePoint& x1, const glm::vec3& beta_camera,
-                                     const EmissionSample& emission, const SurfacePoint& x2, std::uint32_t connections,
-                                     std::uint32_t splits, ShadowQuery& out) {
+// A light subpath's first hit x2, ready for connections: everything about it that does not depend on the camera
+// vertex, computed once and reused by every connection made to it (up to 1 + 2 K per camera sample).
+struct LightVertex {
+  SurfacePoint x2;        // non-delta
+  glm::vec3 target{0.0f};  // leaving_origin(x2): the connections' shadow rays end there
+  glm::vec3 weight{0.0f};  // the emission sample's weight, pi Le / pE
+  // With n p(x2) factored out of A and B (top of the file): x2's BSDF density toward x3 given wo toward x1,
+  // which for a Lambertian x2 is |cos(n2, x2 -> x3)| / pi whichever side x1 is on (a connection that
+  // contributes has x1 on x3's side); the light sampler's density of x3 from x2; and C itself.
+  float continue_pdf = 0.0f;
+  float light_sample_pdf = 0.0f;
+  float connection_pdf = 0.0f;
+};
+
+// The light vertex of a light subpath that starts at `emission` and first hits the non-delta point `x2`.
+inline LightVertex make_light_vertex(const SceneContext& ctx, const EmissionSample& emission, const SurfacePoint& x2,
+                                     std::uint32_t connections) {
+  LightVertex lv;
+  lv.x2 = x2;
+  lv.target = leaving_origin(x2);
+  lv.weight = emission.weight;
+  const float cos2_to_x3 = std::abs(glm::dot(x2.ng, x2.wo));
+  lv.continue_pdf = cos2_to_x3 * std::numbers::inv_pi_v<float>;
+  lv.light_sample_pdf = ctx.lights->pdf_light(emission.light, x2.p, emission.point, emission.normal);
+  lv.connection_pdf = static_cast<float>(connections) * emission.pdf_area * cos2_to_x3 * std::numbers::inv_pi_v<float>;
+  return lv;
+}
+
+// One light connection: the camera vertex x1 (throughput `beta_camera` up to it, `x1_origin` =
+// leaving_origin(x1), where the shadow ray starts: a connection that contributes leaves x1 on wo's side) and
+// the light vertex, ready for the shadow ray between them. False when it cannot contribute. The contribution
+// is beta_camera f1 |cos1| f2 |cos2| / d12^2 * emission.weight / M, weighted by the power heuristic above
+// (n = `splits`: the path tracer's continuations from x1, M = connections).
+inline bool prepare_light_connection(const SurfacePoint& x1, const glm::vec3& x1_origin, const glm::vec3& beta_camera,
+                                     const LightVertex& lv, std::uint32_t connections, std::uint32_t splits,
+                                     ShadowQuery& out) {
+  const SurfacePoint& x2 = lv.x2;
   const glm::vec3 d = x2.p - x1.p;
   const float dist2 = glm::dot(d, d);
   if (!(dist2 > 0.0f)) return false;
@@ -63,27 +93,24 @@ inline bool prepare_light_connection(const SceneContext& ctx, const SurfacePoint
   if (!(max_component(f1) > 0.0f)) return false;
   // x2's BSDF with the roles exchanged: light arrives from x3 (x2.wo) and leaves toward x1, so eval(x2.wo,
   // -to_x2) = f2 |cos(n2, x2 -> x1)|, the cosine the connection needs. Only non-delta (Lambertian) BSDFs get
-  // here, and theirs is symmetric in its two directions, one-sided rule included (both on the front).
+  // here, and theirs is symmetric in its two directions, one-sided rule included (both on the front). f2 > 0
+  // also puts x1 on x3's side of x2, where lv.continue_pdf and lv.target hold.
   const glm::vec3 f2 = x2.bsdf().eval(x2.wo, -to_x2, x2.ng);
   if (!(max_component(f2) > 0.0f)) return false;
 
-  // The three strategies' densities (see the top of the file). The path tracer's continuation from x2 toward
-  // x3 has x2's wo toward x1: pdf(-to_x2, x2.wo).
+  // The three strategies' densities (see the top of the file).
   const float cos2_to_x1 = std::abs(glm::dot(x2.ng, to_x2));
-  const float cos2_to_x3 = std::abs(glm::dot(x2.ng, x2.wo));
   const float p_x2 = pdf_x1 * cos2_to_x1 / dist2;
   const float k = static_cast<float>(splits);
-  const float a = k * p_x2 * x2.bsdf().pdf(-to_x2, x2.wo, x2.ng);
-  const float b = k * p_x2 * ctx.lights->pdf_light(emission.light, x2.p, emission.point, emission.normal);
-  const float c = static_cast<float>(connections) * emission.pdf_area * cos2_to_x3 * std::numbers::inv_pi_v<float>;
-  const float weight = power_heuristic3(c, a, b);
+  const float a = k * p_x2 * lv.continue_pdf;
+  const float b = k * p_x2 * lv.light_sample_pdf;
+  const float weight = power_heuristic3(lv.connection_pdf, a, b);
   if (!(weight > 0.0f)) return false;
 
   Ray& shadow = out.ray;
-  shadow.org = offset_ray_origin(x1.p, glm::dot(to_x2, x1.ng) > 0.0f ? x1.ng : -x1.ng, x1.error_scale);
-  const glm::vec3 target = offset_ray_origin(x2.p, glm::dot(to_x2, x2.ng) < 0.0f ? x2.ng : -x2.ng, x2.error_scale);
-  if (!aim_shadow_ray(shadow, target)) return false;
-  out.contribution = beta_camera * f1 * f2 * emission.weight * (weight / (dist2 * static_cast<float>(connections)));
+  shadow.org = x1_origin;
+  if (!aim_shadow_ray(shadow, lv.target)) return false;
+  out.contribution = beta_camera * f1 * f2 * lv.weight * (weight / (dist2 * static_cast<float>(connections)));
   return std::isfinite(out.contribution.x) && std::isfinite(out.contribution.y) && std::isfinite(out.contribution.z);
 }
 

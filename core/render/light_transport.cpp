@@ -73,7 +73,7 @@ float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf
 glm::vec3 sample_direct_light(const SceneContext& ctx, const SurfacePoint& sp, SamplingStrategy strategy,
                               glm::vec2 u, TraceCounters& counters) {
   ShadowQuery q;
-  if (!prepare_direct_light(ctx, sp, strategy, u, q)) return glm::vec3(0.0f);
+  if (!prepare_direct_light(ctx, sp, leaving_origin(sp), strategy, u, q)) return glm::vec3(0.0f);
   ++counters.shadow_rays;
   return ctx.backend->occluded(q.ray, counters.query_stats()) ? glm::vec3(0.0f) : q.contribution;
 }

@@ -94,6 +94,15 @@ inline Ray spawn_ray(const SurfacePoint& sp, const glm::vec3& dir) {
   return r;
 }
 
+// Where every ray leaving the non-delta surface point `sp` starts: offset to wo's side. Non-delta BSDFs
+// (Lambertian) scatter only to the side wo is on (a sample or an evaluation toward the other side is 0), so
+// a vertex's light sample, its light connections and its continuation all leave from this one point, the
+// same bits spawn_ray gives for their directions; the path integrator computes it once per vertex (about 3%
+// of the Cornell box's instructions went to computing it up to three times, docs/rendering.md).
+inline glm::vec3 leaving_origin(const SurfacePoint& sp) {
+  return offset_ray_origin(sp.p, glm::dot(sp.wo, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
+}
+
 // The MIS weight of emission reached by a BSDF-sampled ray (or by the camera ray: prev_delta = true),
 // given the BSDF's density for that direction and the light sampler's density for the same direction.
 float emission_weight(SamplingStrategy strategy, bool prev_delta, float bsdf_pdf, float light_pdf);
@@ -125,9 +134,10 @@ inline bool aim_shadow_ray(Ray& shadow, const glm::vec3& target) {
 // than a call per light sample (callgrind, Cornell box).
 // `connection_factor` > 0 (light connections, core/render/light_connection.h): the vertex is a camera path's
 // x2 and the light connection strategy competes too, with C / (K p(x2)) = connection_factor * pE |cos(n2, wi)|.
+// `origin` is leaving_origin(sp).
 [[gnu::always_inline]] inline bool prepare_direct_light(const SceneContext& ctx, const SurfacePoint& sp,
-                                                       SamplingStrategy strategy, glm::vec2 u, ShadowQuery& out,
-                                                       float connection_factor = 0.0f) {
+                                                       const glm::vec3& origin, SamplingStrategy strategy,
+                                                       glm::vec2 u, ShadowQuery& out, float connection_factor = 0.0f) {
   if (ctx.lights == nullptr || strategy == SamplingStrategy::Bsdf) return false;
   LightSample ls;
   if (!ctx.lights->sample(sp.p, u, ls) || max_component(ls.radiance) <= 0.0f) return false;
@@ -135,11 +145,14 @@ inline bool aim_shadow_ray(Ray& shadow, const glm::vec3& target) {
   const glm::vec3 f = sp.bsdf().eval(sp.wo, ls.wi, sp.ng, bsdf_pdf);
   if (max_component(f) <= 0.0f) return false;
 
+  // f > 0: ls.wi is on wo's side, so the shadow ray leaves from `origin`.
   Ray& shadow = out.ray;
+  shadow.org = origin;
   if (ls.is_environment) {
-    shadow = spawn_ray(sp, ls.wi);
+    shadow.dir = ls.wi;
+    shadow.tmin = 0.0f;
+    shadow.tmax = std::numeric_limits<float>::infinity();
   } else {
-    shadow.org = offset_ray_origin(sp.p, glm::dot(ls.wi, sp.ng) > 0.0f ? sp.ng : -sp.ng, sp.error_scale);
     const glm::vec3 target =
         offset_ray_origin(ls.point, glm::dot(ls.wi, ls.normal) < 0.0f ? ls.normal : -ls.normal);
     if (!aim_shadow_ray(shadow, target)) return false;

@@ -43,18 +43,19 @@ struct ChunkScratch {
   std::array<Ray, kCapacity> rays;
   std::array<Hit, kCapacity> hits;
   std::array<SurfacePoint, kCapacity> vertex;
+  std::array<glm::vec3, kCapacity> vertex_origin;  // leaving_origin of the non-delta vertices
   std::array<std::uint16_t, kCapacity> vertex_path;
   std::array<glm::vec2, kCapacity> u_light, u_bsdf;
   // Light connections: each path's light subpaths, traced at its first vertex (their two 2D sampler values,
   // the ray to the first hit and that hit, in trace order with their path), and per path the emission sample
-  // and the first hit's surface point (`light_vertex_valid`: non-delta, so connections can be made to it).
+  // and the first hit as a LightVertex (`light_vertex_valid`: non-delta, so connections can be made to it).
   static constexpr std::size_t kLightCapacity = kCapacity * kMaxLightConnections;
   std::array<glm::vec2, kLightCapacity> u_emit_point, u_emit_dir;
   std::array<Ray, kLightCapacity> light_rays;
   std::array<Hit, kLightCapacity> light_hits;
   std::array<std::uint32_t, kLightCapacity> light_slot;
   std::array<EmissionSample, kLightCapacity> emission;
-  std::array<SurfacePoint, kLightCapacity> light_vertex;
+  std::array<LightVertex, kLightCapacity> light_vertex;
   std::array<bool, kLightCapacity> light_vertex_valid;
   // A segment's shadow rays: a light sample per vertex, and the light connections of the first vertices.
   std::array<Ray, kCapacity + kLightCapacity> shadow_rays;
@@ -63,6 +64,7 @@ struct ChunkScratch {
   // Splitting: the first non-delta vertices waiting for their continuations, each with its path, the
   // segments that reached it, the path's state and its sampler as they were before its BSDF sample.
   std::array<SurfacePoint, kCapacity> split_vertex;
+  std::array<glm::vec3, kCapacity> split_origin;
   std::array<std::uint16_t, kCapacity> split_path;
   std::array<int, kCapacity> split_depth;
   std::array<PathState, kCapacity> split_state;
@@ -115,6 +117,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   auto& rays = scratch.rays;
   auto& hits = scratch.hits;
   auto& vertex = scratch.vertex;
+  auto& vertex_origin = scratch.vertex_origin;
   auto& vertex_path = scratch.vertex_path;
   auto& u_light = scratch.u_light;
   auto& u_bsdf = scratch.u_bsdf;
@@ -122,6 +125,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   auto& shadow_contribution = scratch.shadow_contribution;
   auto& shadow_owner = scratch.shadow_owner;
   auto& split_vertex = scratch.split_vertex;
+  auto& split_origin = scratch.split_origin;
   auto& split_path = scratch.split_path;
   auto& split_depth = scratch.split_depth;
   auto& split_state = scratch.split_state;
@@ -144,9 +148,10 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
   }
 
   // The BSDF sample at vertex sp of path i, the roulette, and the path's next ray (false: the path ends).
-  // `scale` is 1 / (the number of continuations the path takes from this vertex).
-  const auto continue_path = [&](int depth, const SurfacePoint& sp, std::uint16_t i, glm::vec2 u, float scale,
-                                 Ray& next) {
+  // `scale` is 1 / (the number of continuations the path takes from this vertex); `origin` is
+  // leaving_origin(sp) at a non-delta vertex (the only side its BSDF samples), unused at a delta one.
+  const auto continue_path = [&](int depth, const SurfacePoint& sp, const glm::vec3& origin, std::uint16_t i,
+                                 glm::vec2 u, float scale, Ray& next) {
     PathState& st = state[i];
     BsdfSample bs;
     if (!sp.bsdf().sample(sp.wo, sp.ng, u, bs) || max_component(bs.weight) <= 0.0f) return false;
@@ -162,7 +167,14 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
     // and add back the noise the split took off (docs/rendering.md#path-splitting).
     const float roulette_scale = st.split ? st.eta_scale * static_cast<float>(splits) : st.eta_scale;
     if (!survive_roulette(depth, settings_.rr_depth, roulette_scale, st.throughput, samples[i].sampler)) return false;
-    next = spawn_ray(sp, bs.wi);
+    if (bs.delta) {
+      next = spawn_ray(sp, bs.wi);
+    } else {
+      next.org = origin;
+      next.dir = bs.wi;
+      next.tmin = 0.0f;
+      next.tmax = std::numeric_limits<float>::infinity();
+    }
     return true;
   };
 
@@ -200,6 +212,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
                 ? connection_factor(connections, st.from_split ? splits : 1u, st.prev_p, st.prev_bsdf_pdf, sp.p, sp.ng, rays[a].dir)
                 : 0.0f;
         vertex[n_vertices] = sp;
+        if (!sp.bsdf().is_delta()) vertex_origin[n_vertices] = leaving_origin(sp);
         vertex_path[n_vertices] = i;
         ++n_vertices;
       }
@@ -234,7 +247,7 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         if (vertex[v].bsdf().is_delta()) continue;
         ShadowQuery q;
         const std::uint16_t i = vertex_path[v];
-        if (!prepare_direct_light(ctx_, vertex[v], strategy, u_light[v], q, state[i].connection_factor))
+        if (!prepare_direct_light(ctx_, vertex[v], vertex_origin[v], strategy, u_light[v], q, state[i].connection_factor))
           continue;
         shadow_rays[n_shadow] = q.ray;
         shadow_contribution[n_shadow] = state[i].throughput * q.contribution;
@@ -270,8 +283,9 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
           if (!hit.found()) continue;
           const GeomShading& g = ctx_.geoms[hit.geom_id];
           if (g.bsdf.is_delta() || g.bsdf.is_black()) continue;
-          light_vertex[light_slot[l]] = make_surface_point(ctx_, light_rays[l], hit);
-          light_vertex_valid[light_slot[l]] = true;
+          const std::uint32_t slot = light_slot[l];
+          light_vertex[slot] = make_light_vertex(ctx_, emission[slot], make_surface_point(ctx_, light_rays[l], hit), connections);
+          light_vertex_valid[slot] = true;
         }
       }
 
@@ -287,8 +301,8 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
             const std::size_t slot = i * connections + m;
             if (!light_vertex_valid[slot]) continue;
             ShadowQuery q;
-            if (!prepare_light_connection(ctx_, vertex[v], state[i].throughput, emission[slot], light_vertex[slot],
-                                          connections, pt_count, q))
+            if (!prepare_light_connection(vertex[v], vertex_origin[v], state[i].throughput, light_vertex[slot], connections,
+                                          pt_count, q))
               continue;
             shadow_rays[n_shadow] = q.ray;
             shadow_contribution[n_shadow] = q.contribution;
@@ -307,13 +321,14 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         if (splits_at(v)) {
           state[i].split = true;
           split_vertex[n_split] = sp;
+          split_origin[n_split] = vertex_origin[v];
           split_path[n_split] = i;
           split_depth[n_split] = depth;
           split_state[n_split] = state[i];
           ++n_split;
           continue;
         }
-        if (!continue_path(depth, sp, i, u_bsdf[v], 1.0f, rays[n_next])) continue;
+        if (!continue_path(depth, sp, vertex_origin[v], i, u_bsdf[v], 1.0f, rays[n_next])) continue;
         active[n_next] = i;
         ++n_next;
       }
@@ -341,7 +356,8 @@ void PathIntegrator::trace_chunk(std::span<CameraSample> samples, std::span<glm:
         Sampler& sampler = samples[i].sampler;
         sampler = split_sampler[i]->split(j, splits);
         state[i] = split_state[end];
-        if (!continue_path(depth, split_vertex[end], i, sampler.next_2d(), split_scale, rays[n_next])) continue;
+        if (!continue_path(depth, split_vertex[end], split_origin[end], i, sampler.next_2d(), split_scale, rays[n_next]))
+          continue;
         active[n_next] = i;
         ++n_next;
       }
