@@ -45,3 +45,15 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
 TWINRAY_KERNEL inline unsigned leaf_children(const WideNode& node) {
   return sign_mask(_mm256_load_si256(reinterpret_cast<const __m256i*>(node.child)));
 }
+
+// Pushes the children in `slots` (a mask of the node's child slots) onto the any-hit stack at `top`, highest
+// slot first, and returns how many: the node's child row permuted by kWideDescendingSlots and stored at once.
+// The store writes all eight lanes; those past the pushed children fall in the stack's unused part
+// (kWideStackSlack).
+TWINRAY_KERNEL inline std::size_t push_children(const WideNode& node, unsigned slots, std::uint32_t* top) {
+  const __m256i order =
+      _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kWideDescendingSlots[slots])));
+  const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(top), _mm256_permutevar8x32_epi32(children, order));
+  return static_cast<std::size_t>(__builtin_popcount(slots));
+}

@@ -2,6 +2,7 @@
 // See backends/simd/isa.h for how the instruction sets are chosen.
 
 #include "backends/wide/wide_kernels.h"
+#include "backends/wide/wide_push_order.h"
 
 #include "backends/bvh/ray_box.h"
 #include "backends/bvh/cull_interval.h"

@@ -76,6 +76,18 @@ inline unsigned leaf_children(const WideNode& node) {
   return static_cast<unsigned>(_mm_movemask_ps(lo)) | (static_cast<unsigned>(_mm_movemask_ps(hi)) << 4);
 }
 
+// Pushes the children in `slots` onto the any-hit stack at `top`, highest slot first (so the lowest is
+// popped first), and returns how many (the 256-bit kernels do it with one permutation).
+inline std::size_t push_children(const WideNode& node, unsigned slots, std::uint32_t* top) {
+  std::size_t n = 0;
+  while (slots != 0) {
+    const unsigned s = 31u - static_cast<unsigned>(__builtin_clz(slots));
+    top[n++] = node.child[s];
+    slots &= ~(1u << s);
+  }
+  return n;
+}
+
 #include "backends/wide/wide_traversal.inl"
 #undef TWINRAY_KERNEL
 

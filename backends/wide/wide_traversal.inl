@@ -21,6 +21,10 @@
 
 namespace wide_detail {
 
+// push_children may store a full row of eight children from the stack's top: room for the lanes past the
+// ones it pushes.
+inline constexpr std::size_t kWideStackSlack = kWideWidth;
+
 struct StackEntry {
   std::uint32_t ref;
   float entry;  // where the ray enters the child's box
@@ -220,7 +224,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
   const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
 
-  std::uint32_t stack[kWideStackSize];
+  std::uint32_t stack[kWideStackSize + kWideStackSlack];
   std::size_t size = 0;
   std::uint64_t boxes_tested = 0, prims_tested = 0;
   bool found = false;
@@ -247,17 +251,11 @@ template <bool kTriangles, bool kSpheres, bool kStats>
       }
     }
     if (found) break;
-    unsigned inner = mask & ~leaves;
+    const unsigned inner = mask & ~leaves;
     if (inner != 0) {
       // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
-      const unsigned next = static_cast<unsigned>(__builtin_ctz(inner));
-      inner &= inner - 1;
-      while (inner != 0) {
-        const unsigned s = 31u - static_cast<unsigned>(__builtin_clz(inner));
-        stack[size++] = node.child[s];
-        inner &= ~(1u << s);
-      }
-      index = node.child[next];
+      index = node.child[__builtin_ctz(inner)];
+      size += push_children(node, inner & (inner - 1), stack + size);
       continue;
     }
     if (size == 0) break;
