@@ -3,11 +3,12 @@
 // See backends/simd/isa.h for how the instruction sets are chosen.
 
 #include "backends/wide/wide_kernels.h"
-#include "backends/wide/wide_push_order.h"
 
-#include "backends/bvh/ray_box.h"
 #include "backends/bvh/cull_interval.h"
+#include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
+#include "backends/wide/wide_octant_rows.h"
+#include "backends/wide/wide_push_order.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 
