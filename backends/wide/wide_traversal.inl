@@ -89,6 +89,12 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 
 namespace wide_detail {
 
+// Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
+// there at their next uses instead of keeping copies in registers.
+TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
+  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
+}
+
 // Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
 // run the copy without counting, so the bookkeeping costs them nothing. kAttributes: whether the winner's u, v
 // and ng are computed (Backend::intersect) or left as a miss has them (Backend::intersect_ids); the traversal,
@@ -97,7 +103,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool intersect_impl(const WideView& bvh, const Ray& ray, Hit& hit,
                                                                  QueryStats* stats) {
   hit = Hit{};
-  const WideBoxRay box_ray(ray);
+  WideBoxRay box_ray(ray);
   [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
 
@@ -119,6 +125,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
     if (!WideRef::is_leaf(ref)) {
       const WideNode& node = bvh.nodes[ref];
       if constexpr (kStats) boxes_tested += filled_slots(node);
+      reread_vectors(box_ray);  // as in occluded_impl: no copies live across the leaf tests
       const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
       if (mask != 0) {
         if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
@@ -210,11 +217,6 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
   return false;
 }
 
-// Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
-// there at their next uses instead of keeping copies in registers.
-TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
-  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
-}
 
 // Any hit; kStats as for intersect_impl.
 template <bool kTriangles, bool kSpheres, bool kStats>
