@@ -16,8 +16,9 @@
 // decided exactly as by brute force.
 //
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
-// headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes()
-// and leaf_children() for its instruction set; it defines the namespace's kernels() (wide_kernels.h).
+// headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes(),
+// leaf_children() and push_children() for its instruction set; it defines the namespace's kernels()
+// (wide_kernels.h).
 
 namespace wide_detail {
 
