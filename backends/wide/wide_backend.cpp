@@ -3,6 +3,7 @@
 #include "backends/bvh/bvh_builder.h"
 #include "backends/bvh/primitive_gather.h"
 #include "backends/bvh/ray_order.h"
+#include "backends/wide/wide_ray_check.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -66,26 +67,26 @@ void WideBackend::build(const SceneGeometry& geometry) {
 
 bool WideBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.intersect == nullptr || !is_valid_ray(ray)) {  // an invalid ray must not sweep the tree
+  if (kernels_.intersect == nullptr || !wide_ray_is_valid(ray)) {  // an invalid ray must not sweep the tree
     hit = Hit{};
     return false;
   }
-  return kernels_.intersect(WideView{nodes_, &prims_}, ray, hit, stats);
+  return kernels_.intersect(WideView{nodes_.data(), &prims_}, ray, hit, stats);
 }
 
 bool WideBackend::intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.intersect_ids == nullptr || !is_valid_ray(ray)) {
+  if (kernels_.intersect_ids == nullptr || !wide_ray_is_valid(ray)) {
     hit = Hit{};
     return false;
   }
-  return kernels_.intersect_ids(WideView{nodes_, &prims_}, ray, hit, stats);
+  return kernels_.intersect_ids(WideView{nodes_.data(), &prims_}, ray, hit, stats);
 }
 
 bool WideBackend::occluded(const Ray& ray, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.occluded == nullptr || !is_valid_ray(ray)) return false;
-  return kernels_.occluded(WideView{nodes_, &prims_}, ray, stats);
+  if (kernels_.occluded == nullptr || !wide_ray_is_valid(ray)) return false;
+  return kernels_.occluded(WideView{nodes_.data(), &prims_}, ray, stats);
 }
 
 void WideBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {

@@ -7,21 +7,24 @@
 // own namespace, after defining TWINRAY_KERNEL (the target attribute), cmp_le_mask(a, b) (bit s set when
 // a[s] <= b[s], false for NaN) and sign_mask(v) (bit s = the sign bit of 32-bit lane s).
 
-// The ray as the slab test needs it; see wide_kernels_sse2.cpp.
+// The ray as the slab test needs it, set up as in wide_kernels_sse2.cpp (one division for the three
+// reciprocals, the row offsets from the table of their sign bits).
 struct WideBoxRay {
   __m256 org[3], inv[3], inv_far[3];
-  std::size_t near_row[3], far_row[3];
+  WideOctantRows rows;
 
   TWINRAY_KERNEL explicit WideBoxRay(const Ray& ray) {
+    const __m128 dir = _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f);
+    const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), dir);
+    alignas(16) float inv_s[4], inv_far_s[4];
+    _mm_store_ps(inv_s, inv_dir);
+    _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
-      const float inv_dir = 1.0f / ray.dir[a];
       org[a] = _mm256_set1_ps(ray.org[a]);
-      inv[a] = _mm256_set1_ps(inv_dir);
-      inv_far[a] = _mm256_set1_ps(inv_dir * kSlabFarScale);
-      const bool negative = std::signbit(inv_dir);
-      near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
-      far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
+      inv[a] = _mm256_set1_ps(inv_s[a]);
+      inv_far[a] = _mm256_set1_ps(inv_far_s[a]);
     }
+    rows = kWideOctantRows[static_cast<unsigned>(_mm_movemask_ps(inv_dir)) & 7u];
   }
 };
 
@@ -32,8 +35,8 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
   const float* rows = &node.lo[0][0];
   __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
   for (int a = 0; a < 3; ++a) {
-    const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.near_row[a]), r.org[a]), r.inv[a]);
-    const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.far_row[a]), r.org[a]), r.inv_far[a]);
+    const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.near_row[a]), r.org[a]), r.inv[a]);
+    const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.far_row[a]), r.org[a]), r.inv_far[a]);
     t0 = _mm256_max_ps(t_near, t0);
     t1 = _mm256_min_ps(t_far, t1);
   }
@@ -44,4 +47,16 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
 // Bit s set when child slot s is a leaf (the reference's top bit).
 TWINRAY_KERNEL inline unsigned leaf_children(const WideNode& node) {
   return sign_mask(_mm256_load_si256(reinterpret_cast<const __m256i*>(node.child)));
+}
+
+// Pushes the children in `slots` (a mask of the node's child slots) onto the any-hit stack at `top`, highest
+// slot first, and returns how many: the node's child row permuted by kWideDescendingSlots and stored at once.
+// The store writes all eight lanes; those past the pushed children fall in the stack's unused part
+// (kWideStackSlack).
+TWINRAY_KERNEL inline std::size_t push_children(const WideNode& node, unsigned slots, std::uint32_t* top) {
+  const __m256i order =
+      _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kWideDescendingSlots[slots])));
+  const __m256i children = _mm256_load_si256(reinterpret_cast<const __m256i*>(node.child));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(top), _mm256_permutevar8x32_epi32(children, order));
+  return static_cast<std::size_t>(__builtin_popcount(slots));
 }

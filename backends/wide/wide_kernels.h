@@ -12,12 +12,11 @@
 #include "core/geometry/hit.h"
 #include "core/geometry/ray.h"
 
-#include <span>
 
 namespace twinray {
 
 struct WideView {
-  std::span<const WideNode> nodes;  // nodes[0] is the root; never empty when a kernel runs
+  const WideNode* nodes;  // nodes[0] is the root; never empty when a kernel runs
   const PrimitiveStore* prims;
 };
 

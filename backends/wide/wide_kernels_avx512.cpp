@@ -4,9 +4,11 @@
 
 #include "backends/wide/wide_kernels.h"
 
-#include "backends/bvh/ray_box.h"
 #include "backends/bvh/cull_interval.h"
+#include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
+#include "backends/wide/wide_octant_rows.h"
+#include "backends/wide/wide_push_order.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 

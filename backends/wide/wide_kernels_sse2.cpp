@@ -3,9 +3,10 @@
 
 #include "backends/wide/wide_kernels.h"
 
-#include "backends/bvh/ray_box.h"
 #include "backends/bvh/cull_interval.h"
+#include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
+#include "backends/wide/wide_octant_rows.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 
@@ -21,23 +22,26 @@ namespace twinray::wide_sse2 {
 #define TWINRAY_KERNEL
 
 // The ray as the slab test needs it: origin and reciprocal direction broadcast, and per axis the row
-// offsets (WideNode::lo_row / hi_row) of the near and far planes, chosen by the direction's sign (-0
-// included) as in ray_box.h.
+// offsets (WideNode::lo_row / hi_row) of the near and far planes, chosen by the sign of the reciprocal (-0
+// included) as in ray_box.h. The reciprocals come from one vector division (each lane the same IEEE
+// quotient as a scalar division) and the row offsets from the table of the three sign bits
+// (wide_octant_rows.h): no branch on the direction's signs, which incoherent rays mispredict.
 struct WideBoxRay {
   __m128 org[3], inv[3];
   __m128 inv_far[3];  // inv scaled by kSlabFarScale, for the far planes (see below)
-  std::size_t near_row[3], far_row[3];
+  WideOctantRows rows;
 
   explicit WideBoxRay(const Ray& ray) {
+    const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f));
+    alignas(16) float inv_s[4], inv_far_s[4];
+    _mm_store_ps(inv_s, inv_dir);
+    _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
-      const float inv_dir = 1.0f / ray.dir[a];
       org[a] = _mm_set1_ps(ray.org[a]);
-      inv[a] = _mm_set1_ps(inv_dir);
-      inv_far[a] = _mm_set1_ps(inv_dir * kSlabFarScale);
-      const bool negative = std::signbit(inv_dir);
-      near_row[a] = negative ? WideNode::hi_row(a) : WideNode::lo_row(a);
-      far_row[a] = negative ? WideNode::lo_row(a) : WideNode::hi_row(a);
+      inv[a] = _mm_set1_ps(inv_s[a]);
+      inv_far[a] = _mm_set1_ps(inv_far_s[a]);
     }
+    rows = kWideOctantRows[static_cast<unsigned>(_mm_movemask_ps(inv_dir)) & 7u];
   }
 };
 
@@ -54,8 +58,8 @@ inline unsigned test_four(const float* rows, const WideBoxRay& r, std::size_t co
                           float* entry) {
   __m128 t0 = tmin, t1 = tmax;
   for (int a = 0; a < 3; ++a) {
-    const __m128 t_near = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.near_row[a] + col), r.org[a]), r.inv[a]);
-    const __m128 t_far = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.far_row[a] + col), r.org[a]), r.inv_far[a]);
+    const __m128 t_near = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.rows.near_row[a] + col), r.org[a]), r.inv[a]);
+    const __m128 t_far = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(rows + r.rows.far_row[a] + col), r.org[a]), r.inv_far[a]);
     t0 = _mm_max_ps(t_near, t0);
     t1 = _mm_min_ps(t_far, t1);
   }
@@ -74,6 +78,18 @@ inline unsigned leaf_children(const WideNode& node) {
   const __m128 lo = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(node.child)));
   const __m128 hi = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(node.child + 4)));
   return static_cast<unsigned>(_mm_movemask_ps(lo)) | (static_cast<unsigned>(_mm_movemask_ps(hi)) << 4);
+}
+
+// Pushes the children in `slots` onto the any-hit stack at `top`, highest slot first (so the lowest is
+// popped first), and returns how many (the 256-bit kernels do it with one permutation).
+inline std::size_t push_children(const WideNode& node, unsigned slots, std::uint32_t* top) {
+  std::size_t n = 0;
+  while (slots != 0) {
+    const unsigned s = 31u - static_cast<unsigned>(__builtin_clz(slots));
+    top[n++] = node.child[s];
+    slots &= ~(1u << s);
+  }
+  return n;
 }
 
 #include "backends/wide/wide_traversal.inl"

@@ -16,10 +16,15 @@
 // decided exactly as by brute force.
 //
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
-// headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes()
-// and leaf_children() for its instruction set; it defines the namespace's kernels() (wide_kernels.h).
+// headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes(),
+// leaf_children() and push_children() for its instruction set; it defines the namespace's kernels()
+// (wide_kernels.h).
 
 namespace wide_detail {
+
+// push_children may store a full row of eight children from the stack's top: room for the lanes past the
+// ones it pushes.
+inline constexpr std::size_t kWideStackSlack = kWideWidth;
 
 struct StackEntry {
   std::uint32_t ref;
@@ -85,6 +90,12 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 
 namespace wide_detail {
 
+// Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
+// there at their next uses instead of keeping copies in registers.
+TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
+  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
+}
+
 // Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
 // run the copy without counting, so the bookkeeping costs them nothing. kAttributes: whether the winner's u, v
 // and ng are computed (Backend::intersect) or left as a miss has them (Backend::intersect_ids); the traversal,
@@ -93,7 +104,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool intersect_impl(const WideView& bvh, const Ray& ray, Hit& hit,
                                                                  QueryStats* stats) {
   hit = Hit{};
-  const WideBoxRay box_ray(ray);
+  WideBoxRay box_ray(ray);
   [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
 
@@ -115,6 +126,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
     if (!WideRef::is_leaf(ref)) {
       const WideNode& node = bvh.nodes[ref];
       if constexpr (kStats) boxes_tested += filled_slots(node);
+      reread_vectors(box_ray);  // as in occluded_impl: no copies live across the leaf tests
       const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
       if (mask != 0) {
         if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
@@ -206,11 +218,6 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
   return false;
 }
 
-// Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
-// there at their next uses instead of keeping copies in registers.
-TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
-  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
-}
 
 // Any hit; kStats as for intersect_impl.
 template <bool kTriangles, bool kSpheres, bool kStats>
@@ -220,7 +227,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
   const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
 
-  std::uint32_t stack[kWideStackSize];
+  std::uint32_t stack[kWideStackSize + kWideStackSlack];
   std::size_t size = 0;
   std::uint64_t boxes_tested = 0, prims_tested = 0;
   bool found = false;
@@ -247,17 +254,11 @@ template <bool kTriangles, bool kSpheres, bool kStats>
       }
     }
     if (found) break;
-    unsigned inner = mask & ~leaves;
+    const unsigned inner = mask & ~leaves;
     if (inner != 0) {
       // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
-      const unsigned next = static_cast<unsigned>(__builtin_ctz(inner));
-      inner &= inner - 1;
-      while (inner != 0) {
-        const unsigned s = 31u - static_cast<unsigned>(__builtin_clz(inner));
-        stack[size++] = node.child[s];
-        inner &= ~(1u << s);
-      }
-      index = node.child[next];
+      index = node.child[__builtin_ctz(inner)];
+      size += push_children(node, inner & (inner - 1), stack + size);
       continue;
     }
     if (size == 0) break;
