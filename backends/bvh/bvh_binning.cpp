@@ -2,6 +2,8 @@
 
 #include "backends/simd/isa.h"
 
+#include <algorithm>
+
 namespace twinray::bvh_binning {
 
 namespace {
@@ -70,6 +72,43 @@ TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> ref
   g.mark_used(bins);
 }
 
+// Bounds3::half_area(), (e.x e.y + e.y e.z) + e.z e.x, per lane of boxes transposed to one row per
+// coordinate (lane a: axis a's box), operation for operation as the scalar half_area() in bvh_binning.h.
+__attribute__((always_inline)) inline __m128 half_area_lanes(const __m128* lo, const __m128* hi) {
+  const __m128 ex = _mm_sub_ps(hi[0], lo[0]), ey = _mm_sub_ps(hi[1], lo[1]), ez = _mm_sub_ps(hi[2], lo[2]);
+  return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)), _mm_mul_ps(ez, ex));
+}
+
+// leaf_tests(count, second) per lane: (count - second + 3) / 4 + second, exact in float.
+__attribute__((always_inline)) inline __m128 tests_lanes(__m128i count, __m128i second) {
+  static_assert(kTriangleBlockLanes == 4, "blocks of four: the division is a shift");
+  const __m128i triangles = _mm_sub_epi32(count, second);
+  return _mm_cvtepi32_ps(_mm_add_epi32(_mm_srli_epi32(_mm_add_epi32(triangles, _mm_set1_epi32(3)), 2), second));
+}
+
+// Three boxes (one row per axis, fourth lane unused) as one row per coordinate: lane a of out[c] is
+// coordinate c of row a.
+__attribute__((always_inline)) inline void transpose_rows(__m128 r0, __m128 r1, __m128 r2, __m128 (&out)[3]) {
+  __m128 r3 = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+  out[0] = r0;
+  out[1] = r1;
+  out[2] = r2;
+}
+
+// The winner of per-lane sweeps: the first minimum in (axis, plane) order, as a scalar sweep of the axes in
+// turn with a strict < finds it (each lane holds its axis's first minimum).
+__attribute__((always_inline)) inline Split first_best_lane(__m128 best_cost, __m128i best_plane) {
+  alignas(16) float costs[4];
+  alignas(16) std::int32_t planes[4];
+  _mm_store_ps(costs, best_cost);
+  _mm_store_si128(reinterpret_cast<__m128i*>(planes), best_plane);
+  Split best;
+  for (int axis = 0; axis < 3; ++axis)
+    if (costs[axis] < best.cost) best = {Split::Kind::Bin, axis, planes[axis], costs[axis]};
+  return best;
+}
+
 }  // namespace
 
 void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
@@ -108,17 +147,6 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
   const auto counts = [&](const std::uint32_t (&c)[3][kMaxBins], int k) {
     return _mm_setr_epi32(static_cast<int>(c[0][k]), static_cast<int>(c[1][k]), static_cast<int>(c[2][k]), 0);
   };
-  // Bounds3::half_area(), (e.x e.y + e.y e.z) + e.z e.x, per lane.
-  const auto half_area = [](const __m128* lo, const __m128* hi) {
-    const __m128 ex = _mm_sub_ps(hi[0], lo[0]), ey = _mm_sub_ps(hi[1], lo[1]), ez = _mm_sub_ps(hi[2], lo[2]);
-    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)), _mm_mul_ps(ez, ex));
-  };
-  // leaf_tests(count, second) per lane: (count - second + 3) / 4 + second, exact in float.
-  static_assert(kTriangleBlockLanes == 4, "blocks of four: the division is a shift");
-  const auto tests = [](__m128i count, __m128i second) {
-    const __m128i triangles = _mm_sub_epi32(count, second);
-    return _mm_cvtepi32_ps(_mm_add_epi32(_mm_srli_epi32(_mm_add_epi32(triangles, _mm_set1_epi32(3)), 2), second));
-  };
 
   __m128 lo[3] = {inf, inf, inf}, hi[3] = {minus_inf, minus_inf, minus_inf};
   __m128i count = _mm_setzero_si128(), second = _mm_setzero_si128();
@@ -129,7 +157,7 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
     }
     count = _mm_add_epi32(count, counts(g.count, k));
     second = _mm_add_epi32(second, counts(g.second_kind, k));
-    right_cost[k] = _mm_mul_ps(half_area(lo, hi), tests(count, second));
+    right_cost[k] = _mm_mul_ps(half_area_lanes(lo, hi), tests_lanes(count, second));
   }
 
   const __m128 usable_mask = _mm_castsi128_ps(_mm_setr_epi32(usable[0] ? -1 : 0, usable[1] ? -1 : 0, usable[2] ? -1 : 0, 0));
@@ -148,20 +176,149 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
     }
     count = _mm_add_epi32(count, counts(g.count, k));
     second = _mm_add_epi32(second, counts(g.second_kind, k));
-    const __m128 cost = _mm_add_ps(_mm_mul_ps(half_area(lo, hi), tests(count, second)), right_cost[k + 1]);
+    const __m128 cost = _mm_add_ps(_mm_mul_ps(half_area_lanes(lo, hi), tests_lanes(count, second)), right_cost[k + 1]);
     const __m128 better = _mm_and_ps(_mm_cmplt_ps(cost, best_cost), usable_mask);
     best_cost = _mm_or_ps(_mm_and_ps(better, cost), _mm_andnot_ps(better, best_cost));
     best_plane = _mm_or_si128(_mm_and_si128(_mm_castps_si128(better), _mm_set1_epi32(k + 1)),
                               _mm_andnot_si128(_mm_castps_si128(better), best_plane));
   }
-  alignas(16) float costs[4];
-  alignas(16) std::int32_t planes[4];
-  _mm_store_ps(costs, best_cost);
-  _mm_store_si128(reinterpret_cast<__m128i*>(planes), best_plane);
-  Split best;
-  for (int axis = 0; axis < 3; ++axis)
-    if (costs[axis] < best.cost) best = {Split::Kind::Bin, axis, planes[axis], costs[axis]};
-  return best;
+  return first_best_lane(best_cost, best_plane);
+}
+
+namespace {
+
+// best_plane_of_occupied_bins; kSecond: the grid counts primitives of the second kind. Inlined into an SSE2
+// and an AVX2 function (the same operations, so the same bits; AVX2's three-operand forms save the register
+// copies of this register-bound loop).
+template <bool kSecond>
+__attribute__((always_inline)) inline Split sweep_occupied_bins(const BinGrid& g, const std::array<bool, 3>& usable) {
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+  // occupied[i][a]: axis a's i-th occupied bin, or 0 past its last (never a winner's plane, see `open`);
+  // steps: the most occupied bins of a usable axis.
+  alignas(16) std::int32_t occupied[kMaxBins][4];
+  std::uint32_t bits[3];
+  int m[3];
+  int steps = 0;
+  for (int a = 0; a < 3; ++a) {
+    bits[a] = usable[static_cast<std::size_t>(a)] ? g.used[a] : 0u;
+    m[a] = __builtin_popcount(bits[a]);
+    steps = std::max(steps, m[a]);
+  }
+  if (steps < 2) return {};  // no axis has a plane with both sides occupied
+  for (int i = 0; i < steps; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      occupied[i][a] = bits[a] != 0 ? __builtin_ctz(bits[a]) : 0;
+      bits[a] &= bits[a] - 1;
+    }
+    occupied[i][3] = 0;
+  }
+
+  // Step i, transposed: lane a holds axis a's i-th occupied bin, or an empty bin (a box that leaves any box
+  // it extends as it is: min(+inf, x) is x for every x, NaN included, and likewise max; no primitives)
+  // past the axis's last. Gathered during the right sweep, which walks the steps backwards, and kept for
+  // the left sweep.
+  struct Step {
+    __m128 lo[3], hi[3];
+    __m128i count, second;
+  };
+  Step step[kMaxBins];
+  alignas(16) static constexpr float kEmptyLo[4] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
+                                                    std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
+  alignas(16) static constexpr float kEmptyHi[4] = {-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
+                                                    -std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+  static constexpr std::uint32_t kNone = 0;
+  const auto gather = [&](int i) {
+    Step& st = step[i];
+    __m128 lo[3], hi[3];
+    std::uint32_t count[3], second[3];
+    for (int a = 0; a < 3; ++a) {
+      const bool real = i < m[a];
+      const int k = occupied[i][a];
+      lo[a] = _mm_load_ps(real ? reinterpret_cast<const float*>(&g.lo[a][k]) : kEmptyLo);
+      hi[a] = _mm_load_ps(real ? reinterpret_cast<const float*>(&g.hi[a][k]) : kEmptyHi);
+      count[a] = *(real ? &g.count[a][k] : &kNone);
+      if constexpr (kSecond) second[a] = *(real ? &g.second_kind[a][k] : &kNone);
+    }
+    transpose_rows(lo[0], lo[1], lo[2], st.lo);
+    transpose_rows(hi[0], hi[1], hi[2], st.hi);
+    st.count = _mm_setr_epi32(static_cast<int>(count[0]), static_cast<int>(count[1]), static_cast<int>(count[2]), 0);
+    if constexpr (kSecond)
+      st.second = _mm_setr_epi32(static_cast<int>(second[0]), static_cast<int>(second[1]), static_cast<int>(second[2]), 0);
+    else
+      st.second = _mm_setzero_si128();
+  };
+
+  // right_cost[i]: axis a's occupied bins i.. on the right (lane a, for i < m[a]). The scalar sweep starts
+  // from the last occupied bin's box and extends it by that bin again, which leaves it as it is; so does
+  // starting from an empty box here, except for a NaN coordinate, hence the last bins' own boxes.
+  __m128 right_cost[kMaxBins];
+  __m128 lo[3], hi[3];
+  {
+    __m128 last_lo[3], last_hi[3];
+    for (int a = 0; a < 3; ++a) {  // every lane of an axis with a plane has m[a] >= 2
+      const bool real = m[a] > 0;
+      const int k = occupied[real ? m[a] - 1 : 0][a];
+      last_lo[a] = _mm_load_ps(real ? reinterpret_cast<const float*>(&g.lo[a][k]) : kEmptyLo);
+      last_hi[a] = _mm_load_ps(real ? reinterpret_cast<const float*>(&g.hi[a][k]) : kEmptyHi);
+    }
+    transpose_rows(last_lo[0], last_lo[1], last_lo[2], lo);
+    transpose_rows(last_hi[0], last_hi[1], last_hi[2], hi);
+  }
+  __m128i count = _mm_setzero_si128(), second = _mm_setzero_si128();
+  for (int i = steps - 1; i > 0; --i) {
+    gather(i);
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = extend_lo(lo[c], step[i].lo[c]);
+      hi[c] = extend_hi(hi[c], step[i].hi[c]);
+    }
+    count = _mm_add_epi32(count, step[i].count);
+    if constexpr (kSecond) second = _mm_add_epi32(second, step[i].second);
+    right_cost[i] = _mm_mul_ps(half_area_lanes(lo, hi), tests_lanes(count, second));
+  }
+  gather(0);
+
+  // The plane after axis a's i-th occupied bin exists while i + 1 < m[a].
+  const __m128i planes_of_axis = _mm_setr_epi32(m[0], m[1], m[2], 0);
+  __m128 best_cost = inf;
+  __m128i best_plane = _mm_setzero_si128();
+  for (int c = 0; c < 3; ++c) {
+    lo[c] = step[0].lo[c];
+    hi[c] = step[0].hi[c];
+  }
+  count = _mm_setzero_si128();
+  second = _mm_setzero_si128();
+  for (int i = 0; i + 1 < steps; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = extend_lo(lo[c], step[i].lo[c]);
+      hi[c] = extend_hi(hi[c], step[i].hi[c]);
+    }
+    count = _mm_add_epi32(count, step[i].count);
+    if constexpr (kSecond) second = _mm_add_epi32(second, step[i].second);
+    const __m128 cost = _mm_add_ps(_mm_mul_ps(half_area_lanes(lo, hi), tests_lanes(count, second)), right_cost[i + 1]);
+    const __m128 open = _mm_castsi128_ps(_mm_cmpgt_epi32(planes_of_axis, _mm_set1_epi32(i + 1)));
+    const __m128 better = _mm_and_ps(_mm_cmplt_ps(cost, best_cost), open);
+    const __m128i plane = _mm_add_epi32(_mm_load_si128(reinterpret_cast<const __m128i*>(occupied[i])), _mm_set1_epi32(1));
+    best_cost = _mm_or_ps(_mm_and_ps(better, cost), _mm_andnot_ps(better, best_cost));
+    best_plane = _mm_or_si128(_mm_and_si128(_mm_castps_si128(better), plane), _mm_andnot_si128(_mm_castps_si128(better), best_plane));
+  }
+  return first_best_lane(best_cost, best_plane);
+}
+
+template <bool kSecond>
+Split sweep_occupied_bins_sse2(const BinGrid& g, const std::array<bool, 3>& usable) {
+  return sweep_occupied_bins<kSecond>(g, usable);
+}
+
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 Split sweep_occupied_bins_avx2(const BinGrid& g, const std::array<bool, 3>& usable) {
+  return sweep_occupied_bins<kSecond>(g, usable);
+}
+
+}  // namespace
+
+Split best_plane_of_occupied_bins(const BinGrid& g, const std::array<bool, 3>& usable, bool second_kind_present, bool avx2) {
+  if (avx2) return second_kind_present ? sweep_occupied_bins_avx2<true>(g, usable) : sweep_occupied_bins_avx2<false>(g, usable);
+  return second_kind_present ? sweep_occupied_bins_sse2<true>(g, usable) : sweep_occupied_bins_sse2<false>(g, usable);
 }
 
 }  // namespace twinray::bvh_binning

@@ -305,44 +305,7 @@ class Builder {
     }
 
     if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable);
-
-    Split best;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (!usable[static_cast<std::size_t>(axis)]) continue;
-      // Only the planes right after an occupied bin are candidates: with bin k - 1 empty, plane k has the
-      // same sides and cost as plane k - 1, which comes first and so wins the tie (strict <). The sweep
-      // therefore runs over the occupied bins only, with the same folds in the same order as over all.
-      const auto a = static_cast<std::size_t>(axis);
-      int occupied[kMaxBins];
-      int n_occupied = 0;
-      for (std::uint32_t m = grid.used[a]; m != 0; m &= m - 1) occupied[n_occupied++] = __builtin_ctz(m);
-      // right_cost[i] = area * primitive tests of the bins occupied[i..]
-      float right_cost[kMaxBins];
-      __m128 lo = grid.lo[a][occupied[n_occupied - 1]], hi = grid.hi[a][occupied[n_occupied - 1]];
-      std::uint32_t count = 0, second = 0;
-      for (int i = n_occupied - 1; i > 0; --i) {
-        const int k = occupied[i];
-        lo = extend_lo(lo, grid.lo[a][k]);
-        hi = extend_hi(hi, grid.hi[a][k]);
-        count += grid.count[a][k];
-        second += grid.second_kind[a][k];
-        right_cost[i] = half_area(lo, hi) * leaf_tests(count, second);
-      }
-      lo = grid.lo[a][occupied[0]];
-      hi = grid.hi[a][occupied[0]];
-      count = 0;
-      second = 0;
-      for (int i = 0; i + 1 < n_occupied; ++i) {
-        const int k = occupied[i];
-        lo = extend_lo(lo, grid.lo[a][k]);
-        hi = extend_hi(hi, grid.hi[a][k]);
-        count += grid.count[a][k];
-        second += grid.second_kind[a][k];
-        const float cost = half_area(lo, hi) * leaf_tests(count, second) + right_cost[i + 1];
-        if (cost < best.cost) best = {Split::Kind::Bin, axis, k + 1, cost};
-      }
-    }
-    return best;
+    return best_plane_of_occupied_bins(grid, usable, second_kind != 0, avx2_);
   }
 
   // Splits refs[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
