@@ -3,6 +3,7 @@
 #include "backends/simd/isa.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace twinray::bvh_binning {
 
@@ -13,8 +14,8 @@ namespace {
 // counts stay 0). The grid is filled in place: at about 4 KiB, copying it cost more than binning a small
 // range.
 template <bool kDense, bool kSecond>
-void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e, const BinMapping& map,
-               std::uint32_t second_kind_begin) {
+__attribute__((always_inline)) inline void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e,
+                                                     const BinMapping& map, std::uint32_t second_kind_begin) {
   if constexpr (kDense) g.clear(map.bins);
   alignas(16) std::int32_t k[4];
   for (std::size_t i = b; i < e; ++i) {
@@ -28,6 +29,14 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
     }
   }
   if constexpr (kDense) g.mark_used(map.bins);
+}
+
+// The lazy (small-range) binning compiled for AVX2: the same operations, so the same grid; the
+// three-operand forms save the register copies.
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 void bin_small_range_avx2(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e,
+                                              const BinMapping& map, std::uint32_t second_kind_begin) {
+  bin_range<false, kSecond>(g, refs, b, e, map, second_kind_begin);
 }
 
 // bin_range<true, kSecond> with AVX2: each bin's box is kept as one 8-lane row (lo, -hi), so that one min
@@ -121,6 +130,11 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
     else bin_range_avx2<false>(g, refs, b, e, map, second_kind_begin);
     return;
   }
+  if (avx2) {
+    if (second_kind_present) bin_small_range_avx2<true>(g, refs, b, e, map, second_kind_begin);
+    else bin_small_range_avx2<false>(g, refs, b, e, map, second_kind_begin);
+    return;
+  }
   if (!second_kind_present) {
     if (dense) bin_range<true, false>(g, refs, b, e, map, second_kind_begin);
     else bin_range<false, false>(g, refs, b, e, map, second_kind_begin);
@@ -128,6 +142,91 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
     if (dense) bin_range<true, true>(g, refs, b, e, map, second_kind_begin);
     else bin_range<false, true>(g, refs, b, e, map, second_kind_begin);
   }
+}
+
+namespace {
+
+__attribute__((always_inline)) inline std::size_t partition_in_place(PrimRef* refs, std::size_t begin, std::size_t end,
+                                                                     const BinMapping& map, int axis, int plane,
+                                                                     std::uint32_t second_kind_begin, RangeInfo& left,
+                                                                     RangeInfo& right) {
+  const __m128i planes = _mm_set1_epi32(plane);
+  const auto goes_left = [&](const PrimRef& r) {
+    const __m128i below = _mm_cmplt_epi32(map.bins_of(r.lo4(), r.hi4()), planes);
+    return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
+  };
+  left = RangeInfo{};
+  right = RangeInfo{};
+  PrimRef* lo = refs + begin;
+  PrimRef* hi = refs + end;
+  for (;;) {
+    while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin);
+    while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin);
+    if (lo == hi) break;
+    // *lo belongs right and hi[-1] left.
+    std::swap(*lo, *--hi);
+    left.add(*lo++, second_kind_begin);
+    right.add(*hi, second_kind_begin);
+  }
+  return static_cast<std::size_t>(lo - refs);
+}
+
+// partition_in_place with AVX2, the sides' boxes and centroid bounds kept in four registers: each as one
+// 8-lane row (lo, -hi), as in bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is
+// -min(-a, -b) bit for bit, in the operand order of extend_lo / extend_hi). The same classification and the
+// same folds in the same order as partition_in_place, so the same primitive order and the same bits.
+TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map,
+                                                        int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
+                                                        RangeInfo& right) {
+  const __m128i planes = _mm_set1_epi32(plane);
+  const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
+  const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  struct Side {
+    __m256 box, centroids;  // (lo, -hi) of the boxes and of the centroids
+    std::uint32_t second;
+  };
+  Side l{empty, empty, 0}, r{empty, empty, 0};
+  const auto goes_left = [&](const PrimRef& p) {
+    const __m128i below = _mm_cmplt_epi32(map.bins_of(p.lo4(), p.hi4()), planes);
+    return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
+  };
+  const auto add = [&](Side& side, const PrimRef& p) TWINRAY_TARGET_AVX2 {
+    const __m256 row = _mm256_load_ps(&p.lo.x);
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
+    side.box = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), side.box);
+    side.centroids = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), side.centroids);
+    side.second += p.id >= second_kind_begin ? 1u : 0u;
+  };
+  PrimRef* lo = refs + begin;
+  PrimRef* hi = refs + end;
+  for (;;) {
+    while (lo < hi && goes_left(*lo)) add(l, *lo++);
+    while (lo < hi && !goes_left(hi[-1])) add(r, *--hi);
+    if (lo == hi) break;
+    // *lo belongs right and hi[-1] left.
+    std::swap(*lo, *--hi);
+    add(l, *lo++);
+    add(r, *hi);
+  }
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const auto describe = [&](const Side& side, RangeInfo& info) TWINRAY_TARGET_AVX2 {
+    info.lo = _mm256_castps256_ps128(side.box);
+    info.hi = _mm_xor_ps(_mm256_extractf128_ps(side.box, 1), sign);
+    info.c_lo = _mm256_castps256_ps128(side.centroids);
+    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(side.centroids, 1), sign);
+    info.second_kind = side.second;
+  };
+  describe(l, left);
+  describe(r, right);
+  return static_cast<std::size_t>(lo - refs);
+}
+
+}  // namespace
+
+std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
+                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2) {
+  if (avx2) return partition_in_place_avx2(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+  return partition_in_place(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
 }
 
 Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable) {

@@ -203,6 +203,13 @@ struct BinMapping {
   }
 };
 
+// Splits refs[begin, end) in place where the primitives' bins on `axis` (BinMapping::bins_of, as binned)
+// are below `plane`, and describes both sides on the way: a Hoare partition, every primitive classified once
+// and folded into the side it ends on, so a small node needs one pass over its primitives instead of three.
+// Returns the end of the left side. `avx2`: the AVX2 build of the same operations (the same result).
+std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
+                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2);
+
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
 // time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).

@@ -334,7 +334,7 @@ class Builder {
           in_scratch = !in_scratch;
           return partition_in_chunks(refs, to, begin, end, goes_left, chunk_counts, split, left, right);
         }
-        return partition_in_place(refs, begin, end, goes_left, left, right);
+        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, left, right, avx2_);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
@@ -356,27 +356,6 @@ class Builder {
     left = info_of(refs, begin, mid);
     right = info_of(refs, mid, end);
     return mid;
-  }
-
-  // Hoare partition that describes both sides on the way: every primitive is classified once and folded
-  // into the side it ends on, so a small node needs one pass over its primitives instead of three.
-  template <class Pred>
-  std::size_t partition_in_place(PrimRef* refs, std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
-                                 RangeInfo& right) const {
-    left = RangeInfo{};
-    right = RangeInfo{};
-    PrimRef* lo = refs + begin;
-    PrimRef* hi = refs + end;
-    for (;;) {
-      while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin_);
-      while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin_);
-      if (lo == hi) break;
-      // *lo belongs right and hi[-1] left.
-      std::swap(*lo, *--hi);
-      left.add(*lo++, second_kind_begin_);
-      right.add(*hi, second_kind_begin_);
-    }
-    return static_cast<std::size_t>(lo - refs);
   }
 
   // Stable partition of from[begin, end) into to[begin, end), in fixed chunks: each chunk's left count is
