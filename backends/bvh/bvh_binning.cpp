@@ -221,7 +221,63 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
   return static_cast<std::size_t>(lo - refs);
 }
 
+__attribute__((always_inline)) inline void scatter(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t li,
+                                                   std::size_t ri, const BinMapping& map, int axis, int plane,
+                                                   std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right) {
+  const __m128i planes = _mm_set1_epi32(plane);
+  left = RangeInfo{};
+  right = RangeInfo{};
+  for (std::size_t i = b; i < e; ++i) {
+    const __m128i below = _mm_cmplt_epi32(map.bins_of(from[i].lo4(), from[i].hi4()), planes);
+    if (((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0) {
+      left.add(from[i], second_kind_begin);
+      to[li++] = from[i];
+    } else {
+      right.add(from[i], second_kind_begin);
+      to[ri++] = from[i];
+    }
+  }
+}
+
+// scatter() with the sides described as in partition_in_place_avx2.
+TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t li, std::size_t ri,
+                                      const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
+                                      RangeInfo& right) {
+  const __m128i planes = _mm_set1_epi32(plane);
+  const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
+  const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  __m256 box[2] = {empty, empty}, centroids[2] = {empty, empty};  // [0]: right, [1]: left; (lo, -hi)
+  std::uint32_t second[2] = {0, 0};
+  for (std::size_t i = b; i < e; ++i) {
+    const PrimRef& p = from[i];
+    const __m256 row = _mm256_load_ps(&p.lo.x);
+    const __m128i below = _mm_cmplt_epi32(map.bins_of(p.lo4(), p.hi4()), planes);
+    const int side = (_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1;
+    const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
+    box[side] = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), box[side]);
+    centroids[side] = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), centroids[side]);
+    second[side] += p.id >= second_kind_begin ? 1u : 0u;
+    _mm256_store_ps(&to[side != 0 ? li++ : ri++].lo.x, row);
+  }
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  for (int side = 0; side < 2; ++side) {
+    RangeInfo& info = side != 0 ? left : right;
+    info.lo = _mm256_castps256_ps128(box[side]);
+    info.hi = _mm_xor_ps(_mm256_extractf128_ps(box[side], 1), sign);
+    info.c_lo = _mm256_castps256_ps128(centroids[side]);
+    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(centroids[side], 1), sign);
+    info.second_kind = second[side];
+  }
+}
+
 }  // namespace
+
+void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
+                   bool avx2) {
+  if (avx2) scatter_avx2(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+  else scatter(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+}
 
 std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
                                   std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2) {
@@ -229,7 +285,9 @@ std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t 
   return partition_in_place(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
 }
 
-Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable) {
+namespace {
+
+__attribute__((always_inline)) inline Split sweep_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable) {
   struct Soa {
     __m128 lo[3], hi[3];  // per coordinate, one lane per axis
   };
@@ -282,6 +340,16 @@ Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bo
                               _mm_andnot_si128(_mm_castps_si128(better), best_plane));
   }
   return first_best_lane(best_cost, best_plane);
+}
+
+TWINRAY_TARGET_AVX2 Split sweep_cleared_grid_avx2(const BinGrid& g, int bins, const std::array<bool, 3>& usable) {
+  return sweep_cleared_grid(g, bins, usable);
+}
+
+}  // namespace
+
+Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable, bool avx2) {
+  return avx2 ? sweep_cleared_grid_avx2(g, bins, usable) : sweep_cleared_grid(g, bins, usable);
 }
 
 namespace {

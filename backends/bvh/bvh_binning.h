@@ -210,6 +210,13 @@ struct BinMapping {
 std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
                                   std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2);
 
+// Scatters from[b, e) stably into `to`, the primitives partition_small_range() would put left from to[left_at]
+// on and the others from to[right_at] on, and describes both sides (folded in the order of `from`). `avx2`:
+// the AVX2 build of the same operations (the same result).
+void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
+                   bool avx2);
+
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
 // time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).
@@ -229,7 +236,8 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
 // plane is a candidate: a plane after an empty bin has the sides, hence the cost, of the plane before it
 // and loses the tie; a plane with an empty side costs inf * 0 = NaN, which never compares less. Worth it
 // for large ranges, whose bins are mostly occupied; small ranges sweep their few occupied bins instead.
-Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable);
+// `avx2`: the AVX2 build of the same operations (same bits).
+Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable, bool avx2);
 
 // The best plane of a lazily filled grid (a small range's: only bins marked used are set) on the usable
 // axes, bit-identical to sweeping each axis's occupied bins in turn in scalar code. Only the planes right

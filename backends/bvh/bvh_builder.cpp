@@ -304,7 +304,7 @@ class Builder {
       }
     }
 
-    if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable);
+    if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable, avx2_);
     return best_plane_of_occupied_bins(grid, usable, second_kind != 0, avx2_);
   }
 
@@ -323,16 +323,11 @@ class Builder {
         // BinMapping::bins_of), is below the plane: all three lanes at once, then the split axis's bit.
         std::array<bool, 3> usable{};
         const BinMapping map = bin_mapping(centroids, usable);
-        const __m128i plane = _mm_set1_epi32(split.bin);
         const int axis = split.axis;
-        const auto goes_left = [&](const PrimRef& r) {
-          const __m128i below = _mm_cmplt_epi32(map.bins_of(r.lo4(), r.hi4()), plane);
-          return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
-        };
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
-          return partition_in_chunks(refs, to, begin, end, goes_left, chunk_counts, split, left, right);
+          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, left, right);
         }
         return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, left, right, avx2_);
       }
@@ -362,8 +357,7 @@ class Builder {
   // the sum of its bins below the plane (the binning's own counts, so no counting pass reads the range
   // again), each chunk scatters to where its sides start and describes them on the way; the descriptions
   // are merged in chunk order.
-  template <class Pred>
-  std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const Pred& goes_left,
+  std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const BinMapping& map,
                                   std::span<const ChunkCounts> chunk_counts, const Split& split, RangeInfo& left,
                                   RangeInfo& right) const {
     const std::size_t n = end - begin;
@@ -387,16 +381,8 @@ class Builder {
     const auto chunk_of = [&](std::size_t b) { return (b - begin) / kRangeChunk; };
     for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
       Sides& part = sides[chunk_of(b)];
-      std::size_t li = left_at[chunk_of(b)], ri = right_at[chunk_of(b)];
-      for (std::size_t i = b; i < e; ++i) {
-        if (goes_left(from[i])) {
-          part.left.add(from[i], second_kind_begin_);
-          to[li++] = from[i];
-        } else {
-          part.right.add(from[i], second_kind_begin_);
-          to[ri++] = from[i];
-        }
-      }
+      scatter_range(from, to, b, e, left_at[chunk_of(b)], right_at[chunk_of(b)], map, split.axis, split.bin, second_kind_begin_,
+                    part.left, part.right, avx2_);
     });
     left = RangeInfo{};
     right = RangeInfo{};
