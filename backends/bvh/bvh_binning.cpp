@@ -49,34 +49,40 @@ template <bool kSecond>
 TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::size_t e,
                                         const BinMapping& map, std::uint32_t second_kind_begin) {
   const int bins = map.bins;
-  __m256 box[3][kMaxBins];
+  // Bins as flat arrays of 3 x kMaxBins: axis a's bin k is entry a kMaxBins + k, so that one vector addition
+  // gives the three entries a primitive updates. Written back to the grid at the end.
+  __m256 box[3 * kMaxBins];
+  std::uint32_t count[3 * kMaxBins], second_count[3 * kMaxBins];
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   for (int a = 0; a < 3; ++a)
     for (int k = 0; k < bins; ++k) {
-      box[a][k] = empty;
-      g.count[a][k] = 0;
-      g.second_kind[a][k] = 0;
+      box[a * kMaxBins + k] = empty;
+      count[a * kMaxBins + k] = 0;
+      second_count[a * kMaxBins + k] = 0;
     }
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
-  alignas(16) std::int32_t k[4];
+  const __m128i axis_base = _mm_setr_epi32(0, kMaxBins, 2 * kMaxBins, 0);
+  alignas(16) std::uint32_t entry[4];
   for (std::size_t i = b; i < e; ++i) {
     const PrimRef& r = refs[i];
-    __m128 lo, hi;
-    map.bins_of(r, lo, hi, k);
+    _mm_store_si128(reinterpret_cast<__m128i*>(entry), _mm_add_epi32(map.bins_of(r.lo4(), r.hi4()), axis_base));
     const __m256 row = _mm256_xor_ps(_mm256_load_ps(&r.lo.x), negate_hi);
     const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
     for (int axis = 0; axis < 3; ++axis) {
-      __m256& bin = box[axis][k[axis]];
+      __m256& bin = box[entry[axis]];
       bin = _mm256_min_ps(row, bin);  // operand order of extend_lo / extend_hi
-      ++g.count[axis][k[axis]];
-      if constexpr (kSecond) g.second_kind[axis][k[axis]] += second;
+      ++count[entry[axis]];
+      if constexpr (kSecond) second_count[entry[axis]] += second;
     }
   }
   const __m128 sign = _mm_set1_ps(-0.0f);
   for (int a = 0; a < 3; ++a)
     for (int k2 = 0; k2 < bins; ++k2) {
-      g.lo[a][k2] = _mm256_castps256_ps128(box[a][k2]);
-      g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(box[a][k2], 1), sign);
+      const __m256 row = box[a * kMaxBins + k2];
+      g.lo[a][k2] = _mm256_castps256_ps128(row);
+      g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(row, 1), sign);
+      g.count[a][k2] = count[a * kMaxBins + k2];
+      g.second_kind[a][k2] = second_count[a * kMaxBins + k2];
     }
   g.mark_used(bins);
 }
