@@ -154,10 +154,18 @@ class Builder {
     const std::size_t n = end - begin;
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
 
-    const Bounds3 box = info.box(), centroids = info.centroids();
     BvhNode& node = nodes_[at];
-    node = BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0};
+    // The box as BvhNode{box.lo, begin, box.hi, 0}: lanes 0-2 of the rows are the coordinates.
+    _mm_store_ps(&node.lo.x, info.lo);
+    node.offset = static_cast<std::uint32_t>(begin);
+    _mm_store_ps(&node.hi.x, info.hi);
+    node.count = 0;
+    if (n == 1) {  // what choose_split() decides for one primitive, without its conversions
+      node.count = 1u | (info.second_kind == 1 ? BvhNode::kSphereLeafBit : 0u);
+      return 1;
+    }
 
+    const Bounds3 box = info.box(), centroids = info.centroids();
     const Split split = choose_split(home_, begin, end, box, centroids, depth, mixed, info.second_kind);
     if (split.kind == Split::Kind::None) {
       node.count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
@@ -232,7 +240,7 @@ class Builder {
     // every plane's cost finite, as the sweep needs it to be for "a plane exists" to mean "a split exists".
     constexpr float kFiniteCostArea = 1e35f;  // x 2 sides x at most 255 tests, far below FLT_MAX
     if (fits_leaf && leaf_cost <= o_.traversal_cost && area <= kFiniteCostArea) {
-      if (has_binned_plane(refs, begin, end, centroids)) return {};
+      if (has_binned_plane(centroids)) return {};
       return {Split::Kind::ObjectMedian, centroids.largest_axis()};
     }
 
@@ -259,18 +267,18 @@ class Builder {
             _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
   }
 
-  // Whether best_binned_split() would find a plane: on some usable axis the primitives fall in at least
-  // two bins (then the first of them has a plane after it, with both sides non-empty).
-  bool has_binned_plane(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids) const {
-    std::array<bool, 3> usable{};
-    const BinMapping map = bin_mapping(centroids, usable);
-    alignas(16) std::int32_t first[4], k[4];
-    __m128 lo, hi;
-    map.bins_of(refs[begin], lo, hi, first);
-    for (std::size_t i = begin + 1; i < end; ++i) {
-      map.bins_of(refs[i], lo, hi, k);
-      for (std::size_t axis = 0; axis < 3; ++axis)
-        if (usable[axis] && k[axis] != first[axis]) return true;
+  // Whether best_binned_split() would find a plane on a range of two or more primitives, without binning
+  // them: exactly when some axis's centroid extent is positive and finite with a finite scale. On such an
+  // axis the primitive whose centroid is the lower bound maps to bin 0 ((c - lo) scale = 0), and the one
+  // whose centroid is the upper bound to min(extent scale, bins - 1) >= 1 (extent and bins / extent are
+  // normal floats, so their rounded product is bins within a few ulps): two occupied bins, so the plane after
+  // the first has both sides non-empty. An axis that bin_mapping() calls usable with an infinite extent has
+  // scale 0, and every centroid there maps to bin 0 ((c - lo) 0 is 0 or NaN, and a NaN lands in bin 0).
+  bool has_binned_plane(const Bounds3& centroids) const {
+    const auto bins = static_cast<float>(o_.bins);
+    for (int axis = 0; axis < 3; ++axis) {
+      const float extent = centroids.hi[axis] - centroids.lo[axis];  // as bin_mapping() computes it
+      if (extent > 0.0f && std::isfinite(extent) && std::isfinite(bins / extent)) return true;
     }
     return false;
   }
