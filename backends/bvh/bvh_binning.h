@@ -1,9 +1,11 @@
 #pragma once
 // The binned SAH's building blocks (Wald 2007, docs/bvh-backend.md "Build"): the primitive reference the
 // builder moves, what a node's split decision knows about its primitives, the bins of all three axes and how
-// a range maps to them, binning a range (SSE, or the AVX2 kernel on dense ranges) and the three-axis sweep of
-// a cleared grid. bvh_builder.cpp decides splits and partitions with them; everything here folds boxes
-// exactly like Bounds3::extend, so the trees do not depend on which path computed them.
+// a range maps to them, binning a range (SSE, or the AVX2 kernel on dense ranges), the three-axis sweeps of
+// a cleared and of a lazily filled grid, and partitioning a range at a plane (in place, or scattered into
+// another array). bvh_builder.cpp decides splits with them; everything here folds boxes exactly like
+// Bounds3::extend, so the trees do not depend on which path computed them. Each of these runs as SSE2 code
+// or as an AVX2 build (`avx2`: the builder's Isa) of the same operations, dispatched at run time.
 
 #include "backends/bvh/primitive_store.h"
 #include "core/geometry/bounds.h"
