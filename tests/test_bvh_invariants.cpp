@@ -191,7 +191,8 @@ TEST(BvhInvariants, SerialAndParallelBuildsAreIdentical) {
 }
 
 TEST(BvhInvariants, EveryInstructionSetBuildsTheSameTree) {
-  // The AVX2 binning kernel keeps bins as (lo, -hi) rows and must pick the same planes as the SSE2 one:
+  // The AVX2 binning kernel keeps bins as (lo, -hi) rows and must pick the same planes as the SSE2 one, and
+  // the AVX2 builds of the sweeps, the partition and the chunk scatter must split the same way:
   // a mixed scene (ranges of 32 or more with both kinds, so the kinds are counted per bin) and the sorted
   // soup of 70000 whose top nodes merge per-chunk grids. On a CPU without AVX2 only SSE2 runs (compared
   // with itself).
@@ -214,6 +215,24 @@ TEST(BvhInvariants, EveryInstructionSetBuildsTheSameTree) {
       }
     }
   }
+}
+
+TEST(BvhInvariants, SmallNodeStaysALeafExactlyWhenItsCentroidsFallInTwoBins) {
+  // bvh8's binary tree (leaves of at most 3, C_trav = C_isect) keeps a node of two primitives as a leaf when
+  // a binned plane exists, which the builder decides from the centroid extents alone: some axis must have a
+  // positive, finite extent with a finite scale (bins / extent). Otherwise it splits at the object median.
+  const auto point = [](float x, float y) { return Bounds3{{x, y, 0.0f}, {x, y, 0.0f}}; };
+  const auto nodes_of = [](std::vector<Bounds3> bounds) {
+    return build_bvh(bounds, static_cast<std::uint32_t>(bounds.size()), WideBuildOptions::default_binary()).nodes.size();
+  };
+  EXPECT_EQ(1u, nodes_of({point(0.0f, 0.0f), point(1.0f, 0.0f)}));  // two bins on x
+  // A denormal extent has an infinite scale: not binnable.
+  EXPECT_EQ(3u, nodes_of({point(0.0f, 0.0f), point(1e-40f, 0.0f)}));
+  // A centroid at infinity (0.5 (lo + hi) overflows): the extent is infinite, the scale 0, every centroid in
+  // bin 0; binnable only through another axis.
+  const Bounds3 far{{3.0e38f, 0.0f, 0.0f}, {3.4e38f, 0.0f, 0.0f}};
+  EXPECT_EQ(3u, nodes_of({point(0.0f, 0.0f), far}));
+  EXPECT_EQ(1u, nodes_of({point(0.0f, 1e-4f), far}));  // area 3.4e34: below the bound of the leaf check
 }
 
 TEST(BvhInvariants, SahBuildBeatsObjectMedian) {

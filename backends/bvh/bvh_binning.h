@@ -1,9 +1,11 @@
 #pragma once
 // The binned SAH's building blocks (Wald 2007, docs/bvh-backend.md "Build"): the primitive reference the
 // builder moves, what a node's split decision knows about its primitives, the bins of all three axes and how
-// a range maps to them, binning a range (SSE, or the AVX2 kernel on dense ranges) and the three-axis sweep of
-// a cleared grid. bvh_builder.cpp decides splits and partitions with them; everything here folds boxes
-// exactly like Bounds3::extend, so the trees do not depend on which path computed them.
+// a range maps to them, binning a range (SSE, or the AVX2 kernel on dense ranges), the three-axis sweeps of
+// a cleared and of a lazily filled grid, and partitioning a range at a plane (in place, or scattered into
+// another array). bvh_builder.cpp decides splits with them; everything here folds boxes exactly like
+// Bounds3::extend, so the trees do not depend on which path computed them. Each of these runs as SSE2 code
+// or as an AVX2 build (`avx2`: the builder's Isa) of the same operations, dispatched at run time.
 
 #include "backends/bvh/primitive_store.h"
 #include "core/geometry/bounds.h"
@@ -203,6 +205,20 @@ struct BinMapping {
   }
 };
 
+// Splits refs[begin, end) in place where the primitives' bins on `axis` (BinMapping::bins_of, as binned)
+// are below `plane`, and describes both sides on the way: a Hoare partition, every primitive classified once
+// and folded into the side it ends on, so a small node needs one pass over its primitives instead of three.
+// Returns the end of the left side. `avx2`: the AVX2 build of the same operations (the same result).
+std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
+                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2);
+
+// Scatters from[b, e) stably into `to`, the primitives partition_small_range() would put left from to[left_at]
+// on and the others from to[right_at] on, and describes both sides (folded in the order of `from`). `avx2`:
+// the AVX2 build of the same operations (the same result).
+void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
+                   bool avx2);
+
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a
 // time (from 16 or 24 it cost more instructions, docs/bvh-backend.md).
@@ -222,6 +238,19 @@ void bin_range(BinGrid& g, std::span<const PrimRef> refs, std::size_t b, std::si
 // plane is a candidate: a plane after an empty bin has the sides, hence the cost, of the plane before it
 // and loses the tie; a plane with an empty side costs inf * 0 = NaN, which never compares less. Worth it
 // for large ranges, whose bins are mostly occupied; small ranges sweep their few occupied bins instead.
-Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable);
+// `avx2`: the AVX2 build of the same operations (same bits).
+Split best_plane_of_cleared_grid(const BinGrid& g, int bins, const std::array<bool, 3>& usable, bool avx2);
+
+// The best plane of a lazily filled grid (a small range's: only bins marked used are set) on the usable
+// axes, bit-identical to sweeping each axis's occupied bins in turn in scalar code. Only the planes right
+// after an occupied bin are candidates: with bin k - 1 empty, plane k has the sides and cost of plane
+// k - 1, which comes first and wins the tie (strict <). The three axes are swept at once, lane a walking
+// axis a's i-th occupied bin at step i (transposed as in best_plane_of_cleared_grid); an axis with fewer
+// occupied bins is padded with empty bins, which leave a side's box and counts as they are, and its lanes
+// past its last plane never win. Most calls of a bvh8 build are ranges of a few primitives (about five
+// occupied bins per axis on the dragon), where the scalar sweeps were a sixth of the build.
+// `second_kind_present`: the grid counts primitives of the second kind (else its counts are read as 0);
+// `avx2`: run the AVX2 build of the same operations (same bits).
+Split best_plane_of_occupied_bins(const BinGrid& g, const std::array<bool, 3>& usable, bool second_kind_present, bool avx2);
 
 }  // namespace twinray::bvh_binning

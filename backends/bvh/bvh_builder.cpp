@@ -118,14 +118,15 @@ class Builder {
                           bool in_scratch, std::vector<Pending>& below) const {
     const std::size_t n = end - begin;
     PrimRef* const refs = in_scratch ? scratch_ : home_;
-    const Bounds3 box = info.box(), centroids = info.centroids();
+    const Bounds3 box = info.box();
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
     std::vector<ChunkCounts> chunk_counts;  // per chunk of the binning: the partition needs no counting pass
-    const Split split = choose_split(refs, begin, end, box, centroids, depth, mixed, info.second_kind, &chunk_counts);
+    BinMapping map{};
+    const Split split = choose_split(refs, begin, end, info, depth, mixed, map, &chunk_counts);
     RangeInfo left_info, right_info;
     bool children_in_scratch = in_scratch;
     const std::size_t mid =
-        partition(refs, begin, end, centroids, split, left_info, right_info, children_in_scratch, chunk_counts);
+        partition(refs, begin, end, map, split, left_info, right_info, children_in_scratch, chunk_counts);
     const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
     nodes_[at] = BvhNode{box.lo, static_cast<std::uint32_t>(right_at), box.hi, 0};
     std::size_t count = 1;
@@ -154,18 +155,26 @@ class Builder {
     const std::size_t n = end - begin;
     const bool mixed = info.second_kind != 0 && info.second_kind != n;
 
-    const Bounds3 box = info.box(), centroids = info.centroids();
     BvhNode& node = nodes_[at];
-    node = BvhNode{box.lo, static_cast<std::uint32_t>(begin), box.hi, 0};
+    // The box as BvhNode{box.lo, begin, box.hi, 0}: lanes 0-2 of the rows are the coordinates.
+    _mm_store_ps(&node.lo.x, info.lo);
+    node.offset = static_cast<std::uint32_t>(begin);
+    _mm_store_ps(&node.hi.x, info.hi);
+    node.count = 0;
+    if (n == 1) {  // what choose_split() decides for one primitive, without its conversions
+      node.count = 1u | (info.second_kind == 1 ? BvhNode::kSphereLeafBit : 0u);
+      return 1;
+    }
 
-    const Split split = choose_split(home_, begin, end, box, centroids, depth, mixed, info.second_kind);
+    BinMapping map{};
+    const Split split = choose_split(home_, begin, end, info, depth, mixed, map);
     if (split.kind == Split::Kind::None) {
       node.count = static_cast<std::uint32_t>(n) | (info.second_kind == n ? BvhNode::kSphereLeafBit : 0u);
       return 1;
     }
     RangeInfo left_info, right_info;
     bool in_scratch = false;  // small ranges stay in place
-    const std::size_t mid = partition(home_, begin, end, centroids, split, left_info, right_info, in_scratch, {});
+    const std::size_t mid = partition(home_, begin, end, map, split, left_info, right_info, in_scratch, {});
 
     if (o_.parallel && n >= kParallelGrain) {
       const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
@@ -209,20 +218,26 @@ class Builder {
 
   // `chunk_counts`, if given, receives the bin counts of every chunk of a large range that is split by
   // bins (see best_binned_split).
-  Split choose_split(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& box, const Bounds3& centroids,
-                     std::size_t depth, bool mixed, std::uint32_t second_kind,
-                     std::vector<ChunkCounts>* chunk_counts = nullptr) const {
+  // `map` receives the range's bin mapping when the split is by bins (partition() classifies with it).
+  Split choose_split(const PrimRef* refs, std::size_t begin, std::size_t end, const RangeInfo& info, std::size_t depth, bool mixed,
+                     BinMapping& map, std::vector<ChunkCounts>* chunk_counts = nullptr) const {
+    const std::uint32_t second_kind = info.second_kind;
     const std::size_t n = end - begin;
     const bool fits_leaf = n <= static_cast<std::size_t>(o_.max_leaf_size);
     if (n == 1 || (fits_leaf && !mixed && (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth)))
       return {};
     if (fits_leaf && mixed) return {Split::Kind::ByKind};
 
-    const bool centroids_coincide = centroids.extent() == glm::vec3(0.0f);
-    if (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth || centroids_coincide)
-      return {Split::Kind::ObjectMedian, centroids.largest_axis()};
+    // Bounds3::extent() of the centroids, lane by lane (a range is never empty).
+    const __m128 extent = _mm_sub_ps(info.c_hi, info.c_lo);
+    const bool centroids_coincide = (_mm_movemask_ps(_mm_cmpeq_ps(extent, _mm_setzero_ps())) & 7) == 7;
+    const auto median = [&] { return Split{Split::Kind::ObjectMedian, info.centroids().largest_axis()}; };
+    if (o_.split_method == BvhSplitMethod::ObjectMedian || depth >= kMedianOnlyDepth || centroids_coincide) return median();
 
-    const float area = box.half_area();
+    const float area = half_area(info.lo, info.hi);  // Bounds3::half_area() operation for operation
+    std::array<bool, 3> usable{};
+    bool plane_exists = false;
+    map = bin_mapping(extent, info.c_lo, usable, plane_exists);
     const float leaf_cost = o_.intersection_cost * leaf_tests(static_cast<std::uint32_t>(n), second_kind);
     // A node that may be a leaf and whose leaf costs no more than one interior step stays a leaf whenever a
     // binned split exists: the split's cost below is C_trav plus a non-negative term, never less than the
@@ -232,57 +247,49 @@ class Builder {
     // every plane's cost finite, as the sweep needs it to be for "a plane exists" to mean "a split exists".
     constexpr float kFiniteCostArea = 1e35f;  // x 2 sides x at most 255 tests, far below FLT_MAX
     if (fits_leaf && leaf_cost <= o_.traversal_cost && area <= kFiniteCostArea) {
-      if (has_binned_plane(refs, begin, end, centroids)) return {};
-      return {Split::Kind::ObjectMedian, centroids.largest_axis()};
+      if (plane_exists) return {};
+      return median();
     }
 
-    Split best = best_binned_split(refs, begin, end, centroids, second_kind, chunk_counts);
-    if (best.kind == Split::Kind::None)  // centroid extent too small to bin on any axis
-      return {Split::Kind::ObjectMedian, centroids.largest_axis()};
+    Split best = best_binned_split(refs, begin, end, map, usable, second_kind, chunk_counts);
+    if (best.kind == Split::Kind::None) return median();  // centroid extent too small to bin on any axis
     // Compare with stopping here: both costs per unit of this node's area.
     const float split_cost = area > 0.0f ? o_.traversal_cost + o_.intersection_cost * best.cost / area : INFINITY;
     if (fits_leaf && leaf_cost <= split_cost) return {};
     return best;
   }
 
-  // The mapping of centroids to bins on every axis, and which axes are usable: an extent of zero or one too
-  // small for a finite scale cannot be binned.
-  BinMapping bin_mapping(const Bounds3& centroids, std::array<bool, 3>& usable) const {
-    const int bins = o_.bins;
-    std::array<float, 3> scale{};
-    for (int axis = 0; axis < 3; ++axis) {
-      const float extent = centroids.hi[axis] - centroids.lo[axis];
-      scale[static_cast<std::size_t>(axis)] = static_cast<float>(bins) / extent;
-      usable[static_cast<std::size_t>(axis)] = extent > 0.0f && std::isfinite(scale[static_cast<std::size_t>(axis)]);
-    }
-    return {_mm_setr_ps(centroids.lo.x, centroids.lo.y, centroids.lo.z, 0.0f),
-            _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f), _mm_set1_ps(static_cast<float>(bins - 1)), bins};
-  }
-
-  // Whether best_binned_split() would find a plane: on some usable axis the primitives fall in at least
-  // two bins (then the first of them has a plane after it, with both sides non-empty).
-  bool has_binned_plane(const PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids) const {
-    std::array<bool, 3> usable{};
-    const BinMapping map = bin_mapping(centroids, usable);
-    alignas(16) std::int32_t first[4], k[4];
-    __m128 lo, hi;
-    map.bins_of(refs[begin], lo, hi, first);
-    for (std::size_t i = begin + 1; i < end; ++i) {
-      map.bins_of(refs[i], lo, hi, k);
-      for (std::size_t axis = 0; axis < 3; ++axis)
-        if (usable[axis] && k[axis] != first[axis]) return true;
-    }
-    return false;
+  // The mapping of centroids to bins on every axis (centroid extent and lower bound in SSE rows), and which
+  // axes are usable: an extent of zero or one too small for a finite scale cannot be binned. Lane by lane
+  // the scalar `bins / extent` and `extent > 0 && isfinite(scale)`.
+  // `plane_exists`: whether best_binned_split() would find a plane on a range of two or more primitives,
+  // decided without binning them: exactly when some axis's extent is also finite. On such an axis the
+  // primitive whose centroid is the lower bound maps to bin 0 ((c - lo) scale = 0), and the one whose
+  // centroid is the upper bound to min(extent scale, bins - 1) >= 1 (extent and bins / extent are normal
+  // floats, so their rounded product is bins within a few ulps): two occupied bins, so the plane after the
+  // first has both sides non-empty. A usable axis with an infinite extent has scale 0, and every centroid
+  // there maps to bin 0 ((c - lo) 0 is 0 or NaN, and a NaN lands in bin 0).
+  BinMapping bin_mapping(__m128 extent, __m128 c_lo, std::array<bool, 3>& usable, bool& plane_exists) const {
+    const __m128 bins = _mm_set1_ps(static_cast<float>(o_.bins));
+    const __m128 scale = _mm_div_ps(bins, extent);
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
+    const __m128 finite_scale = _mm_cmplt_ps(_mm_and_ps(scale, abs_mask), inf);
+    const __m128 usable_lanes = _mm_and_ps(_mm_cmpgt_ps(extent, _mm_setzero_ps()), finite_scale);
+    const int usable_mask = _mm_movemask_ps(usable_lanes);
+    for (std::size_t axis = 0; axis < 3; ++axis) usable[axis] = (usable_mask >> axis & 1) != 0;
+    plane_exists = (_mm_movemask_ps(_mm_and_ps(usable_lanes, _mm_cmplt_ps(_mm_and_ps(extent, abs_mask), inf))) & 7) != 0;
+    const __m128 xyz_lanes = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));  // the fourth lane 0, as before
+    return {_mm_and_ps(c_lo, xyz_lanes), _mm_and_ps(scale, xyz_lanes), _mm_set1_ps(static_cast<float>(o_.bins - 1)), o_.bins};
   }
 
   // Bins the centroids on every axis whose extent allows it (one pass), then sweeps the bins-1 planes
   // between them. Split::cost is the un-normalized sum area(L) tests(L) + area(R) tests(R), tests counted
   // as in leaf_tests. A large range (kParallelRangeGrain or more) is binned in fixed chunks of kRangeChunk,
   // one grid each, merged in chunk order; each chunk's counts go to `chunk_counts` when it is given.
-  Split best_binned_split(const PrimRef* range_refs, std::size_t begin, std::size_t end, const Bounds3& centroids,
-                          std::uint32_t second_kind, std::vector<ChunkCounts>* chunk_counts) const {
-    std::array<bool, 3> usable{};
-    const BinMapping map = bin_mapping(centroids, usable);
+  Split best_binned_split(const PrimRef* range_refs, std::size_t begin, std::size_t end, const BinMapping& map,
+                          const std::array<bool, 3>& usable, std::uint32_t second_kind,
+                          std::vector<ChunkCounts>* chunk_counts) const {
     const int bins = o_.bins;
     const std::span<const PrimRef> refs(range_refs, end);
     BinGrid grid;
@@ -304,52 +311,15 @@ class Builder {
       }
     }
 
-    if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable);
-
-    Split best;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (!usable[static_cast<std::size_t>(axis)]) continue;
-      // Only the planes right after an occupied bin are candidates: with bin k - 1 empty, plane k has the
-      // same sides and cost as plane k - 1, which comes first and so wins the tie (strict <). The sweep
-      // therefore runs over the occupied bins only, with the same folds in the same order as over all.
-      const auto a = static_cast<std::size_t>(axis);
-      int occupied[kMaxBins];
-      int n_occupied = 0;
-      for (std::uint32_t m = grid.used[a]; m != 0; m &= m - 1) occupied[n_occupied++] = __builtin_ctz(m);
-      // right_cost[i] = area * primitive tests of the bins occupied[i..]
-      float right_cost[kMaxBins];
-      __m128 lo = grid.lo[a][occupied[n_occupied - 1]], hi = grid.hi[a][occupied[n_occupied - 1]];
-      std::uint32_t count = 0, second = 0;
-      for (int i = n_occupied - 1; i > 0; --i) {
-        const int k = occupied[i];
-        lo = extend_lo(lo, grid.lo[a][k]);
-        hi = extend_hi(hi, grid.hi[a][k]);
-        count += grid.count[a][k];
-        second += grid.second_kind[a][k];
-        right_cost[i] = half_area(lo, hi) * leaf_tests(count, second);
-      }
-      lo = grid.lo[a][occupied[0]];
-      hi = grid.hi[a][occupied[0]];
-      count = 0;
-      second = 0;
-      for (int i = 0; i + 1 < n_occupied; ++i) {
-        const int k = occupied[i];
-        lo = extend_lo(lo, grid.lo[a][k]);
-        hi = extend_hi(hi, grid.hi[a][k]);
-        count += grid.count[a][k];
-        second += grid.second_kind[a][k];
-        const float cost = half_area(lo, hi) * leaf_tests(count, second) + right_cost[i + 1];
-        if (cost < best.cost) best = {Split::Kind::Bin, axis, k + 1, cost};
-      }
-    }
-    return best;
+    if (end - begin >= kDenseFrom) return best_plane_of_cleared_grid(grid, bins, usable, avx2_);
+    return best_plane_of_occupied_bins(grid, usable, second_kind != 0, avx2_);
   }
 
   // Splits refs[begin, end) and describes both sides. Large ranges are partitioned stably in parallel
   // chunks (scattered into the other array: `in_scratch` flips; where each chunk's sides go follows from
   // the binning's `chunk_counts`), small ones in place; the choice depends on the size only, so serial and
   // parallel builds stay identical.
-  std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const Bounds3& centroids, const Split& split,
+  std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, const Split& split,
                         RangeInfo& left, RangeInfo& right, bool& in_scratch, std::span<const ChunkCounts> chunk_counts) const {
     PrimRef* first = refs + begin;
     PrimRef* last = refs + end;
@@ -358,20 +328,13 @@ class Builder {
       case Split::Kind::Bin: {
         // A primitive goes left when its bin on the split axis, computed as the binning did (same mapping,
         // BinMapping::bins_of), is below the plane: all three lanes at once, then the split axis's bit.
-        std::array<bool, 3> usable{};
-        const BinMapping map = bin_mapping(centroids, usable);
-        const __m128i plane = _mm_set1_epi32(split.bin);
         const int axis = split.axis;
-        const auto goes_left = [&](const PrimRef& r) {
-          const __m128i below = _mm_cmplt_epi32(map.bins_of(r.lo4(), r.hi4()), plane);
-          return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
-        };
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
-          return partition_in_chunks(refs, to, begin, end, goes_left, chunk_counts, split, left, right);
+          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, left, right);
         }
-        return partition_in_place(refs, begin, end, goes_left, left, right);
+        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, left, right, avx2_);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
@@ -395,33 +358,11 @@ class Builder {
     return mid;
   }
 
-  // Hoare partition that describes both sides on the way: every primitive is classified once and folded
-  // into the side it ends on, so a small node needs one pass over its primitives instead of three.
-  template <class Pred>
-  std::size_t partition_in_place(PrimRef* refs, std::size_t begin, std::size_t end, const Pred& goes_left, RangeInfo& left,
-                                 RangeInfo& right) const {
-    left = RangeInfo{};
-    right = RangeInfo{};
-    PrimRef* lo = refs + begin;
-    PrimRef* hi = refs + end;
-    for (;;) {
-      while (lo < hi && goes_left(*lo)) left.add(*lo++, second_kind_begin_);
-      while (lo < hi && !goes_left(hi[-1])) right.add(*--hi, second_kind_begin_);
-      if (lo == hi) break;
-      // *lo belongs right and hi[-1] left.
-      std::swap(*lo, *--hi);
-      left.add(*lo++, second_kind_begin_);
-      right.add(*hi, second_kind_begin_);
-    }
-    return static_cast<std::size_t>(lo - refs);
-  }
-
   // Stable partition of from[begin, end) into to[begin, end), in fixed chunks: each chunk's left count is
   // the sum of its bins below the plane (the binning's own counts, so no counting pass reads the range
   // again), each chunk scatters to where its sides start and describes them on the way; the descriptions
   // are merged in chunk order.
-  template <class Pred>
-  std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const Pred& goes_left,
+  std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const BinMapping& map,
                                   std::span<const ChunkCounts> chunk_counts, const Split& split, RangeInfo& left,
                                   RangeInfo& right) const {
     const std::size_t n = end - begin;
@@ -445,16 +386,8 @@ class Builder {
     const auto chunk_of = [&](std::size_t b) { return (b - begin) / kRangeChunk; };
     for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
       Sides& part = sides[chunk_of(b)];
-      std::size_t li = left_at[chunk_of(b)], ri = right_at[chunk_of(b)];
-      for (std::size_t i = b; i < e; ++i) {
-        if (goes_left(from[i])) {
-          part.left.add(from[i], second_kind_begin_);
-          to[li++] = from[i];
-        } else {
-          part.right.add(from[i], second_kind_begin_);
-          to[ri++] = from[i];
-        }
-      }
+      scatter_range(from, to, b, e, left_at[chunk_of(b)], right_at[chunk_of(b)], map, split.axis, split.bin, second_kind_begin_,
+                    part.left, part.right, avx2_);
     });
     left = RangeInfo{};
     right = RangeInfo{};
