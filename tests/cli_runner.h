@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace twinray::testing {
 
@@ -40,8 +41,11 @@ inline std::filesystem::path source_path(const std::string& relative) {
 }
 
 // A fresh, empty folder for one test's files.
+// Keyed by the process as well as the name: ctest runs every test in its own process, and two checkouts (or two
+// ctest runs) on one machine must not remove each other's folders mid-test.
 inline std::filesystem::path scratch_dir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("twinray-test-" + name);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("twinray-test-" + name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
