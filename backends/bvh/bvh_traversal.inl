@@ -205,8 +205,9 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
       for (std::uint32_t slot = first; slot < first + count && !found; slot += kTriangleBlockLanes) {
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
-        found = intersect_triangle_block_any(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin,
-                                             ray.tmax) != 0;
+        // Membership decided before the quotient where it can be (triangle_refine.h, certainly_inside).
+        found = intersect_triangle_block_any</*kDivisionFreeFirst=*/true>(tri_ray, prims.block_of(slot),
+                                                                         lane_mask(in_block), ray.tmin, ray.tmax) != 0;
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {

@@ -95,7 +95,7 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
 [[gnu::always_inline]] inline bool refine_triangle_in_interval(const TriangleRay& ray, const glm::vec3& p0,
                                                                const glm::vec3& p1, const glm::vec3& p2, float tmin,
                                                                float tmax) {
-  return refine_detail::refine_in_interval(ray.refine, p0, p1, p2, tmin, tmax);
+  return refine_detail::refine_in_interval</*kDivisionFreeFirst=*/true>(ray.refine, p0, p1, p2, tmin, tmax);
 }
 // The barycentrics and the geometric normal (triangle_geometric_normal's bits) at once, from one e1 x e2:
 // what a closest-hit traversal asks for its winner.
