@@ -131,6 +131,34 @@ SceneGeometry random_triangle_soup(std::size_t n, std::uint64_t seed) {
   return g;
 }
 
+SceneGeometry sliver_soup(std::size_t n, std::uint64_t seed) {
+  Rng rng(seed, 6);
+  SceneGeometry g;
+  g.meshes.push_back(make_triangle_soup(n, rng, 0));
+  TriangleMesh& mesh = g.meshes.front();
+  // Every fourth triangle, from index 1 on, becomes a sliver along its first edge: its apex moved to a point
+  // of that edge, lifted off it by the edge's length over the aspect. Index 1 has the largest aspect, so
+  // the triangles after it are numbered after a sliver that any area threshold of a "degenerate" test drops.
+  for (std::size_t i = 1; i < mesh.indices.size(); i += 4) {
+    const glm::uvec3 tri = mesh.indices[i];
+    const glm::dvec3 p0(mesh.positions[tri.x]), p1(mesh.positions[tri.y]), p2(mesh.positions[tri.z]);
+    const glm::dvec3 edge = p1 - p0;
+    const glm::dvec3 lift = glm::normalize(glm::cross(glm::cross(edge, p2 - p0), edge));
+    const double aspect = i == 1 ? 1e7 : std::pow(10.0, 3.0 + 4.0 * rng.next_double());
+    for (;;) {
+      const double s = 0.1 + 0.8 * rng.next_double();
+      const glm::vec3 apex(p0 + s * edge + (glm::length(edge) / aspect) * lift);
+      // Rounded to float the apex must stay off the edge (the loaders drop collinear triangles).
+      const glm::dvec3 area2 = glm::cross(edge, glm::dvec3(apex) - p0);
+      if (glm::dot(area2, area2) > 0.0) {
+        mesh.positions[tri.z] = apex;
+        break;
+      }
+    }
+  }
+  return g;
+}
+
 SceneGeometry coincident_boxes(std::size_t n, int per_cluster, std::uint64_t seed) {
   // The triples of cube corners (bit a of a corner: + in axis a) that take both signs in every axis.
   std::vector<std::array<int, 3>> triples;

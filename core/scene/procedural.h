@@ -41,6 +41,12 @@ SceneGeometry random_spheres(std::size_t n, std::uint64_t seed);
 // 3, centered at the origin, radius 0.5) as the last geometry.
 SceneGeometry mixed_spheres_and_triangles(std::size_t n_spheres, std::size_t n_triangles, std::uint64_t seed);
 
+// A soup of n triangles (random_triangle_soup's kind) in which every fourth, from index 1, is a thin but valid
+// sliver: its apex lies on a point of its first edge lifted off it by the edge's length over an aspect ratio
+// log-uniform in [1e3, 1e7] (index 1: 1e7). Every other triangle is numbered after a sliver, so a builder
+// that drops "degenerate" slivers and numbers the rest 0, 1, 2, ... names them wrong. One mesh, geom_id 0.
+SceneGeometry sliver_soup(std::size_t n, std::uint64_t seed);
+
 // n clusters of `per_cluster` (1..32) different triangles whose bounding boxes are all one cube: every
 // triangle's vertices are three corners of the cube [c - r, c + r]^3 that differ in every axis, so the box of
 // each (and its centre, the centroid a builder bins by) is exactly the cube and its centre c. No split by box

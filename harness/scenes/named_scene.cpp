@@ -162,6 +162,13 @@ const std::vector<Generator>& generators() {
          return random_triangle_soup(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles, "N")),
                                      static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
        }},
+      {{"sliver-soup", "N:SEED",
+        "a soup of N triangles in [-1, 1]^3, every fourth (from index 1) a thin valid sliver of aspect 1e3 to 1e7"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "N:SEED");
+         return sliver_soup(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles, "N")),
+                            static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
       {{"duplicates", "N:SEED", "a soup of N triangles listed twice in mesh 0, and mesh 1 a copy of mesh 0 (exact ties)"},
        [](const ProceduralArgs& a) {
          a.expect_count(2, 2, "N:SEED");

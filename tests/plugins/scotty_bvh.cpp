@@ -104,9 +104,11 @@
 //  56 SEGMENT_FIRST_HIT a closest-hit query with a finite tmax returns the first hit found ("a segment is a
 //                       shadow ray")
 //  57 FLOAT_SLAB_ABS_EPS the slab test in float, the exit padded by an absolute 1e-5 ("epsilon for robustness")
+//                       (not caught: docs/grading.md, "Bugs the grader does not catch", says why)
 //  58 GEOM_ID_8BIT      (geom_id, prim_id) packed into one 32-bit word, 8 bits of geometry: geometry 256 + i is i
 //  59 SLIVER_DROP       the builder drops "degenerate" triangles (area below 1e-6 of the longest edge squared)
 //                       and numbers the ones it keeps 0, 1, 2, ...: every later prim_id of the mesh is shifted
+//                       (caught by closest-slivers, procedural:sliver-soup)
 //  60 KD_SPLIT_PRUNE    kd-tree habits in a BVH: children ordered by the direction's sign on the split axis, and
 //                       the far child taken to start at the split plane, so a hit before the plane skips it
 //  61 UV_LAST_CANDIDATE every candidate is tested against the whole ray and writes u, v through the test's out
