@@ -1,6 +1,7 @@
 #include "backends/bvh/bvh_builder.h"
 
 #include "backends/bvh/bvh_binning.h"
+#include "backends/bvh/bvh_builder_memory.h"
 
 #include "backends/bvh/primitive_store.h"
 #include "backends/simd/isa.h"
@@ -53,8 +54,7 @@ class Builder {
       : home_(refs.data()), nodes_(nodes), second_kind_begin_(second_kind_begin), o_(o), avx2_(isa >= Isa::Avx2) {
     if (refs.size() >= kParallelRangeGrain) {
       // Uninitialised: a range is scattered into it before it is read.
-      static_assert(std::is_trivially_default_constructible_v<PrimRef>, "new[] must not initialise the scratch");
-      scratch_owner_.reset(new PrimRef[refs.size()]);
+      scratch_owner_ = BuildArray<PrimRef>(refs.size());
       scratch_ = scratch_owner_.get();
     }
   }
@@ -400,7 +400,7 @@ class Builder {
 
   PrimRef* home_;                   // every range's primitives, except large ranges in the scratch array
   PrimRef* scratch_ = nullptr;      // the other array of large ranges' scatters (none for a small input)
-  std::unique_ptr<PrimRef[]> scratch_owner_;  // freed between build_tree()'s two phases
+  BuildArray<PrimRef> scratch_owner_;  // freed between build_tree()'s two phases
   BvhNode* nodes_;
   std::uint32_t second_kind_begin_;
   const BvhBuildOptions& o_;
@@ -414,8 +414,9 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
   BvhTree tree;
   if (bounds.empty()) return tree;
   const std::size_t n = bounds.size();
-  // Uninitialised (PrimRef is trivially constructible): every element is written right below.
-  const std::unique_ptr<PrimRef[]> ref_storage(new PrimRef[n]);
+  // Uninitialised (PrimRef is trivially constructible): every element is written right below. On huge
+  // pages, as the other large arrays of the build (bvh_builder_memory.h).
+  const BuildArray<PrimRef> ref_storage(n);
   const std::span<PrimRef> refs(ref_storage.get(), n);
   const auto make_refs = [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) refs[i] = PrimRef{bounds[i].lo, static_cast<std::uint32_t>(i), bounds[i].hi, 0.0f};
@@ -427,17 +428,19 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
     make_refs(0, n);
 
   // Uninitialised: build() writes every node it reports, and only those are read.
-  static_assert(std::is_trivially_default_constructible_v<BvhNode>, "new[] must not initialise the nodes");
-  const std::unique_ptr<BvhNode[]> nodes(new BvhNode[2 * refs.size() - 1]);
+  const BuildArray<BvhNode> nodes(2 * refs.size() - 1);
   Builder builder(refs, nodes.get(), second_kind_begin, options, isa);
   const std::size_t node_count = builder.build_tree(n, builder.info_of(refs.data(), 0, n));
   // The compacting copy (one serial depth-first walk) and the primitive order are independent: on two or
   // more threads the latter runs beside the former.
   const auto compact = [&] {
     tree.nodes.reserve(node_count);
+    advise_huge_pages(tree.nodes.data(), node_count * sizeof(BvhNode));
     builder.compact(0, 0, tree);
   };
   const auto order = [&] {
+    tree.prim_order.reserve(refs.size());
+    advise_huge_pages(tree.prim_order.data(), refs.size() * sizeof(std::uint32_t));
     tree.prim_order.resize(refs.size());
     const auto copy_ids = [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) tree.prim_order[i] = refs[i].id;

@@ -1,5 +1,6 @@
 #include "backends/wide/wide_collapse.h"
 
+#include "backends/bvh/bvh_builder_memory.h"
 #include "backends/bvh/primitive_store.h"
 
 #include <tbb/parallel_for.h>
@@ -88,8 +89,9 @@ class Collapser {
       if (root_volume > 0.0) volume_weight_ = double(o_.volume_cost) * double(root_area) / root_volume;
       if (!std::isfinite(volume_weight_)) volume_weight_ = 0.0;
     }
-    sub_.reset(new Subtree[n]);
-    plan_.reset(new Plan[n]);
+    // About 64 bytes per binary node, first touched by evaluate(): on huge pages (bvh_builder_memory.h).
+    sub_ = BuildArray<Subtree>(n);
+    plan_ = BuildArray<Plan>(n);
     evaluate_subtree(0, static_cast<std::uint32_t>(n));
 
     out_ = &tree;
@@ -102,7 +104,7 @@ class Collapser {
       tree.nodes[0].child[0] = WideRef::kLeafBit;
       tree.leaves[0] = {sub_[0].first, sub_[0].count, sub_[0].spheres};
     } else {
-      size_.reset(new WideSize[n]);
+      size_ = BuildArray<WideSize>(n);
       const WideSize& root = measure(0);
       tree.nodes.resize(root.nodes);
       tree.leaves.resize(root.leaves);
@@ -383,9 +385,9 @@ class Collapser {
 
   const BvhTree& bin_;
   const WideCollapseOptions& o_;
-  std::unique_ptr<Subtree[]> sub_;  // per binary node, all written by evaluate()
-  std::unique_ptr<Plan[]> plan_;
-  std::unique_ptr<WideSize[]> size_;  // per binary node, written by measure() for the wide nodes only
+  BuildArray<Subtree> sub_;  // per binary node, all written by evaluate()
+  BuildArray<Plan> plan_;
+  BuildArray<WideSize> size_;  // per binary node, written by measure() for the wide nodes only
   WideTree* out_ = nullptr;
   float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
   double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume
