@@ -118,6 +118,11 @@ class Collapser {
       tree.leaves[0] = {sub_[0].first, sub_[0].count, sub_[0].spheres};
     } else {
       const WideSize& root = measure(0);
+      // Huge pages for the interior of both (bvh_builder_memory.h), before resize() first touches them.
+      tree.nodes.reserve(root.nodes);
+      tree.leaves.reserve(root.leaves);
+      advise_huge_pages(tree.nodes.data(), root.nodes * sizeof(WideNode));
+      advise_huge_pages(tree.leaves.data(), root.leaves * sizeof(WideLeafRange));
       tree.nodes.resize(root.nodes);
       tree.leaves.resize(root.leaves);
       tree.max_depth = root.height;
