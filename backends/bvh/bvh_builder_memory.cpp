@@ -55,6 +55,18 @@ void* allocate_build_memory(std::size_t bytes) {
   return ::operator new(bytes == 0 ? 1 : bytes, kHeapAlignment);
 }
 
+void release_build_memory_tail(void* data, std::size_t used, std::size_t bytes) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  if (data == nullptr || bytes < kOwnMappingFrom) return;
+  const std::size_t first = round_up(used, kHugePage), size = round_up(bytes, kHugePage);
+  if (first < size) (void)madvise(static_cast<char*>(data) + first, size - first, MADV_DONTNEED);
+#else
+  (void)data;
+  (void)used;
+  (void)bytes;
+#endif
+}
+
 void free_build_memory(void* data, std::size_t bytes) noexcept {
   if (data == nullptr) return;
 #if defined(__linux__) && defined(MADV_HUGEPAGE)

@@ -11,6 +11,7 @@
 // are the same bytes.
 
 #include <cstddef>
+#include <new>
 #include <type_traits>
 #include <utility>
 
@@ -26,6 +27,10 @@ void advise_huge_pages(const void* data, std::size_t bytes);
 // unaligned edge stays on small pages), else the ordinary heap. Uninitialised, 64-byte aligned at least.
 void* allocate_build_memory(std::size_t bytes);
 void free_build_memory(void* data, std::size_t bytes) noexcept;
+// Gives the pages of build memory `data` (allocated for `bytes`) after its first `used` bytes back to the
+// system, keeping the allocation: for an array that turned out smaller than its worst case. Those bytes
+// must not be read again (they would read as zeros). Heap memory is left alone.
+void release_build_memory_tail(void* data, std::size_t used, std::size_t bytes) noexcept;
 
 // An uninitialised array of n trivially constructible T on build memory (like new T[n], which leaves
 // such T uninitialised too): every element must be written before it is read.
@@ -63,6 +68,29 @@ class BuildArray {
  private:
   T* data_ = nullptr;
   std::size_t n_ = 0;
+};
+
+// A std::vector allocator on build memory whose resize() leaves trivially constructible elements
+// uninitialised (default-initialised, where std::allocator value-initialises, i.e. zero-fills: a pass
+// that first-touches every page on one thread). For arrays whose every element is written before it is
+// read.
+template <class T>
+struct BuildAllocator {
+  using value_type = T;
+  BuildAllocator() = default;
+  template <class U>
+  BuildAllocator(const BuildAllocator<U>&) noexcept {}  // NOLINT(google-explicit-constructor): rebinding
+  T* allocate(std::size_t n) { return static_cast<T*>(allocate_build_memory(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) noexcept { free_build_memory(p, n * sizeof(T)); }
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+  friend bool operator==(const BuildAllocator&, const BuildAllocator&) { return true; }
 };
 
 }  // namespace twinray
