@@ -31,7 +31,7 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   std::size_t next_leaf = 0;
   for (BvhNode& node : tree.nodes)
     if (node.is_leaf()) node.offset = offsets[next_leaf++];
-  nodes_ = std::move(tree.nodes);
+  nodes_.assign(tree.nodes.begin(), tree.nodes.end());  // exact size: tree.nodes keeps the gapped tree's capacity
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();
   kernels_ = has_triangles || has_spheres ? bvh_kernels(isa_, has_triangles, has_spheres) : BvhKernels{};

@@ -4,6 +4,7 @@
 // primitive and returns the node array and the order in which the primitives must be stored.
 
 #include "backends/bvh/bvh_build_options.h"
+#include "backends/bvh/bvh_builder_memory.h"
 #include "backends/bvh/bvh_node.h"
 #include "backends/simd/isa.h"
 #include "core/geometry/bounds.h"
@@ -16,7 +17,10 @@
 namespace twinray {
 
 struct BvhTree {
-  std::vector<BvhNode> nodes;          // depth-first; nodes[0] is the root
+  // Depth-first; nodes[0] is the root. On build memory (bvh_builder_memory.h): the builder writes its
+  // gapped tree into this very array and compacts it in place, and the capacity stays the gapped
+  // tree's (2 n - 1 nodes for n primitives).
+  std::vector<BvhNode, BuildAllocator<BvhNode>> nodes;
   // Primitive ids in leaf order: a leaf covers prim_order[first_prim, first_prim + prim_count).
   // (The backend later rebases leaf offsets into per-kind arrays.)
   std::vector<std::uint32_t> prim_order;

@@ -1,5 +1,6 @@
 #include "backends/wide/wide_collapse.h"
 
+#include "backends/bvh/bvh_builder_memory.h"
 #include "backends/bvh/primitive_store.h"
 
 #include <tbb/parallel_for.h>
@@ -38,11 +39,24 @@ constexpr std::size_t kParallelNodes = 4096;
 // node costs about a thousand instructions and covers about twenty primitives).
 constexpr std::uint32_t kParallelPrims = 4096;
 
+// The wide subtree rooted at a binary node that becomes a wide node: how many wide nodes (itself included)
+// and leaves it holds, how many of those leaves are its own slots, and its height in wide nodes. Written by
+// measure() for the binary nodes that become wide nodes only.
+struct WideSize {
+  std::uint32_t nodes, leaves, own_leaves, height;
+};
+
 // What the dynamic program decided for one binary node.
 // Plan and Subtree have no member initialisers: one of each per binary node is allocated uninitialised
 // and evaluate() writes every member (clearing them cost more than the rest of the allocation).
 struct Plan {
-  std::array<float, kW + 1> cost;     // cost[j], j = 1..kW: as at most j slots (cost[0] = inf, never used)
+  // Once the dynamic program is done its costs are read no more (run() takes the tree's cost first), so
+  // measure() writes a wide node's size over them: a separate array of sizes per binary node was 16 more
+  // bytes of fresh memory per node for the few (one in twenty or thirty) that become wide nodes.
+  union {
+    std::array<float, kW + 1> cost;   // cost[j], j = 1..kW: as at most j slots (cost[0] = inf, never used)
+    WideSize size;                    // after the dynamic program, for a wide node
+  };
   std::array<std::uint8_t, kW + 1> k;  // j >= 2: left gets k slots; 0: cost[j] = cost[j - 1]
   // The smallest s with cost[s] == cost[s + 1] == ... == cost[kW] (more slots than s buy nothing), or 0
   // when some cost is NaN (then nothing is known about the order of the costs). See split_of().
@@ -56,12 +70,6 @@ struct Subtree {
   float area;
 };
 
-// The wide subtree rooted at a binary node that becomes a wide node: how many wide nodes (itself included)
-// and leaves it holds, how many of those leaves are its own slots, and its height in wide nodes. Written by
-// measure() for the binary nodes that become wide nodes only.
-struct WideSize {
-  std::uint32_t nodes, leaves, own_leaves, height;
-};
 static_assert(std::is_trivially_default_constructible_v<Plan> && std::is_trivially_default_constructible_v<Subtree> &&
                   std::is_trivially_default_constructible_v<WideSize>,
               "new[] must not initialise them");
@@ -88,9 +96,16 @@ class Collapser {
       if (root_volume > 0.0) volume_weight_ = double(o_.volume_cost) * double(root_area) / root_volume;
       if (!std::isfinite(volume_weight_)) volume_weight_ = 0.0;
     }
-    sub_.reset(new Subtree[n]);
-    plan_.reset(new Plan[n]);
+    // About 64 bytes per binary node, first touched by evaluate(): on huge pages (bvh_builder_memory.h).
+    sub_ = BuildArray<Subtree>(n);
+    plan_ = BuildArray<Plan>(n);
     evaluate_subtree(0, static_cast<std::uint32_t>(n));
+    // The root's cost, before measure() writes sizes over the costs of the wide nodes' plans. A one-leaf
+    // tree has no binary children to split between (split_cost would read past the plan): its root's one
+    // slot costs the leaf itself.
+    const float root_area = sub_[0].area;
+    const float below_root = bin_.nodes[0].is_leaf() ? plan_[0].cost[1] : split_cost(0, kW);
+    tree.sah_cost = root_area > 0.0f ? (o_.node_cost * root_area + below_root) / root_area : 0.0;
 
     out_ = &tree;
     if (bin_.nodes[0].is_leaf()) {
@@ -102,18 +117,17 @@ class Collapser {
       tree.nodes[0].child[0] = WideRef::kLeafBit;
       tree.leaves[0] = {sub_[0].first, sub_[0].count, sub_[0].spheres};
     } else {
-      size_.reset(new WideSize[n]);
       const WideSize& root = measure(0);
+      // Huge pages for the interior of both (bvh_builder_memory.h), before resize() first touches them.
+      tree.nodes.reserve(root.nodes);
+      tree.leaves.reserve(root.leaves);
+      advise_huge_pages(tree.nodes.data(), root.nodes * sizeof(WideNode));
+      advise_huge_pages(tree.leaves.data(), root.leaves * sizeof(WideLeafRange));
       tree.nodes.resize(root.nodes);
       tree.leaves.resize(root.leaves);
       tree.max_depth = root.height;
       emit(0, 0, 1, 0, root.own_leaves);
     }
-    const float root_area = sub_[0].area;
-    // A one-leaf tree has no binary children to split between (split_cost would read past the plan): its
-    // root's one slot costs the leaf itself.
-    const float below_root = bin_.nodes[0].is_leaf() ? plan_[0].cost[1] : split_cost(0, kW);
-    tree.sah_cost = root_area > 0.0f ? (o_.node_cost * root_area + below_root) / root_area : 0.0;
     return tree;
   }
 
@@ -279,9 +293,25 @@ class Collapser {
   }
 
   // Larger weight (area plus the volume term) first: the any-hit visiting order (see wide_collapse.h).
+  // At most 8 slots: an insertion sort, stable like std::stable_sort and with the same comparison, so the
+  // same order whenever the comparison is a strict weak order, i.e. no weight is NaN; with a NaN weight
+  // (boxes whose extent overflows float) the two sorts may disagree, and std::stable_sort decides as it
+  // always did. std::stable_sort took a temporary buffer from the heap per wide node.
   void sort_by_weight(Slots& slots) const {
-    std::stable_sort(slots.node.begin(), slots.node.begin() + slots.count,
-                     [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; });
+    const auto heavier = [&](std::uint32_t a, std::uint32_t b) { return sub_[a].area > sub_[b].area; };
+    bool nan = false;
+    for (int s = 0; s < slots.count; ++s) nan |= std::isnan(sub_[slots.node[static_cast<std::size_t>(s)]].area);
+    if (nan) {
+      std::stable_sort(slots.node.begin(), slots.node.begin() + slots.count, heavier);
+      return;
+    }
+    for (int s = 1; s < slots.count; ++s) {
+      const std::uint32_t x = slots.node[static_cast<std::size_t>(s)];
+      int j = s;
+      for (; j > 0 && heavier(x, slots.node[static_cast<std::size_t>(j - 1)]); --j)
+        slots.node[static_cast<std::size_t>(j)] = slots.node[static_cast<std::size_t>(j - 1)];
+      slots.node[static_cast<std::size_t>(j)] = x;
+    }
   }
 
   // Runs body(c) for c in [0, count): in TBB tasks when the wide node at binary node i covers many
@@ -309,12 +339,12 @@ class Collapser {
     for_children(i, n_inner, [&](int c) { measure(inner[static_cast<std::size_t>(c)]); });
     size.leaves = size.own_leaves;
     for (int c = 0; c < n_inner; ++c) {
-      const WideSize& child = size_[inner[static_cast<std::size_t>(c)]];
+      const WideSize& child = plan_[inner[static_cast<std::size_t>(c)]].size;
       size.nodes += child.nodes;
       size.leaves += child.leaves;
       size.height = std::max(size.height, child.height + 1);
     }
-    return size_[i] = size;
+    return plan_[i].size = size;
   }
 
   static void init_empty(WideNode& node) {
@@ -364,10 +394,10 @@ class Collapser {
     std::array<std::uint32_t, kW> grandchildren_at, child_leaves_at, child_below_at;
     std::uint32_t next_node = children_at + static_cast<std::uint32_t>(n_inner);
     std::uint32_t next_own = below_leaves_at, next_below = below_leaves_at;
-    for (int c = 0; c < n_inner; ++c) next_below += size_[inner[static_cast<std::size_t>(c)]].own_leaves;
+    for (int c = 0; c < n_inner; ++c) next_below += plan_[inner[static_cast<std::size_t>(c)]].size.own_leaves;
     for (int c = 0; c < n_inner; ++c) {
       const auto u = static_cast<std::size_t>(c);
-      const WideSize& child = size_[inner[u]];
+      const WideSize& child = plan_[inner[u]].size;
       grandchildren_at[u] = next_node;
       child_leaves_at[u] = next_own;
       child_below_at[u] = next_below;
@@ -383,9 +413,8 @@ class Collapser {
 
   const BvhTree& bin_;
   const WideCollapseOptions& o_;
-  std::unique_ptr<Subtree[]> sub_;  // per binary node, all written by evaluate()
-  std::unique_ptr<Plan[]> plan_;
-  std::unique_ptr<WideSize[]> size_;  // per binary node, written by measure() for the wide nodes only
+  BuildArray<Subtree> sub_;  // per binary node, all written by evaluate()
+  BuildArray<Plan> plan_;
   WideTree* out_ = nullptr;
   float lane_penalty_ = 0.0f;    // cost of one empty lane of a leaf's last block (padding_cost in area units)
   double volume_weight_ = 0.0;   // volume_cost A(root) / V(root): area units per unit of volume
