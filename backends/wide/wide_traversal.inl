@@ -93,7 +93,7 @@ namespace wide_detail {
 // Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
 // there at their next uses instead of keeping copies in registers.
 TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
-  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
+  r.reread();
 }
 
 // Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
@@ -275,14 +275,19 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 }  // namespace wide_detail
 
 template <bool kTriangles, bool kSpheres, bool kAttributes>
-TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+TWINRAY_KERNEL bool wide_intersect(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) {  // an invalid ray must not sweep the tree
+    hit = Hit{};
+    return false;
+  }
   if (stats != nullptr)
     return wide_detail::intersect_impl<kTriangles, kSpheres, true, kAttributes>(bvh, ray, hit, stats);
   return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
 template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
+TWINRAY_KERNEL bool wide_occluded(WideView bvh, const Ray& ray, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) return false;
   if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true>(bvh, ray, stats);
   return wide_detail::occluded_impl<kTriangles, kSpheres, false>(bvh, ray, nullptr);
 }
