@@ -147,13 +147,16 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
       if constexpr (kStats) prims_tested += count;
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-        const std::uint32_t first_slot = first * kTriangleBlockLanes;
-        for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
+        // Block by block as in leaf_occluded.
+        const TriangleBlock* block = prims.triangle_blocks.data() + first;
+        std::uint32_t block_slot = first * kTriangleBlockLanes;
+        for (std::uint32_t remaining = count;;
+             remaining -= kTriangleBlockLanes, ++block, block_slot += kTriangleBlockLanes) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
           intersect_triangle_block_closest(
-              tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(count - k), ray.tmin, tmax,
+              tri_ray, *block, lane_mask(remaining), ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
-                const std::uint32_t slot = first_slot + k + lane;
+                const std::uint32_t slot = block_slot + lane;
                 const PrimitiveKey key = prims.triangle_keys[slot];
                 if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
                 hit.t = tmax = t;
@@ -167,6 +170,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
                 }
                 return tmax;
               });
+          if (remaining <= kTriangleBlockLanes) break;
         }
       } else if constexpr (kSpheres) {
         for (std::uint32_t i = first; i < first + count; ++i) {
@@ -209,13 +213,14 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-    for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
-      const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
-      if constexpr (kStats) prims_tested += in_block;
+    // Block by block, counting down the triangles left (at least one): most leaves are one block, which
+    // this tests without a loop counter, an index or a division.
+    const TriangleBlock* block = prims.triangle_blocks.data() + first;
+    for (std::uint32_t remaining = count;; remaining -= kTriangleBlockLanes, ++block) {
+      if constexpr (kStats) prims_tested += std::min(remaining, kTriangleBlockLanes);
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                       lane_mask(in_block), ray.tmin, ray.tmax) != 0)
-        return true;
+      if (intersect_triangle_block_any(tri_ray, *block, lane_mask(remaining), ray.tmin, ray.tmax) != 0) return true;
+      if (remaining <= kTriangleBlockLanes) break;
     }
   } else if constexpr (kSpheres) {
     for (std::uint32_t i = first; i < first + count; ++i) {
