@@ -3,7 +3,6 @@
 #include "backends/bvh/bvh_builder.h"
 #include "backends/bvh/primitive_gather.h"
 #include "backends/bvh/ray_order.h"
-#include "backends/wide/wide_ray_check.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -65,9 +64,10 @@ void WideBackend::build(const SceneGeometry& geometry) {
   stats_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The kernels check the ray themselves (wide_kernels.h).
 bool WideBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.intersect == nullptr || !wide_ray_is_valid(ray)) {  // an invalid ray must not sweep the tree
+  if (kernels_.intersect == nullptr) {
     hit = Hit{};
     return false;
   }
@@ -76,7 +76,7 @@ bool WideBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
 
 bool WideBackend::intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.intersect_ids == nullptr || !wide_ray_is_valid(ray)) {
+  if (kernels_.intersect_ids == nullptr) {
     hit = Hit{};
     return false;
   }
@@ -85,7 +85,7 @@ bool WideBackend::intersect_ids(const Ray& ray, Hit& hit, QueryStats* stats) con
 
 bool WideBackend::occluded(const Ray& ray, QueryStats* stats) const {
   if (stats) ++stats->queries;
-  if (kernels_.occluded == nullptr || !wide_ray_is_valid(ray)) return false;
+  if (kernels_.occluded == nullptr) return false;
   return kernels_.occluded(WideView{nodes_.data(), &prims_}, ray, stats);
 }
 

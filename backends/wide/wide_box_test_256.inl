@@ -5,12 +5,20 @@
 //
 // No include guard: wide_kernels_avx2.cpp and wide_kernels_avx512.cpp include this file once, inside their
 // own namespace, after defining TWINRAY_KERNEL (the target attribute), cmp_le_mask(a, b) (bit s set when
-// a[s] <= b[s], false for NaN) and sign_mask(v) (bit s = the sign bit of 32-bit lane s).
+// a[s] <= b[s], false for NaN), sign_mask(v) (bit s = the sign bit of 32-bit lane s), and how the ray's
+// per-axis values are kept: the type WideSplat, make_splat(float) -> WideSplat, splat(WideSplat) -> __m256 and
+// kWideSplatScalars (whether WideSplat is a scalar).
+// AVX2 keeps them as broadcast vectors (its arithmetic has no broadcast memory operand); AVX-512 keeps the
+// scalars, which the slab test reads as {1to8} operands of its subtractions and products: the same values
+// lane by lane, without the set-up's nine broadcasts and nine 32-byte stores.
 
 // The ray as the slab test needs it, set up as in wide_kernels_sse2.cpp (one division for the three
 // reciprocals, the row offsets from the table of their sign bits).
 struct WideBoxRay {
-  __m256 org[3], inv[3], inv_far[3];
+  WideSplat org[3], inv[3], inv_far[3];
+  // AVX-512 only (kWideSplatScalars): the origin again, for the far planes' subtractions, so that each of the
+  // two reads its own {1to8} operand (GCC would broadcast one copy into a register at every node visit).
+  WideSplat org_far[3];
   WideOctantRows rows;
 
   TWINRAY_KERNEL explicit WideBoxRay(const Ray& ray) {
@@ -20,11 +28,18 @@ struct WideBoxRay {
     _mm_store_ps(inv_s, inv_dir);
     _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
-      org[a] = _mm256_set1_ps(ray.org[a]);
-      inv[a] = _mm256_set1_ps(inv_s[a]);
-      inv_far[a] = _mm256_set1_ps(inv_far_s[a]);
+      org[a] = make_splat(ray.org[a]);
+      if constexpr (kWideSplatScalars) org_far[a] = make_splat(ray.org[a]);
+      inv[a] = make_splat(inv_s[a]);
+      inv_far[a] = make_splat(inv_far_s[a]);
     }
     rows = kWideOctantRows[static_cast<unsigned>(_mm_movemask_ps(inv_dir)) & 7u];
+  }
+
+  // Tells the compiler the values may have changed in memory (wide_traversal.inl, reread_vectors).
+  TWINRAY_KERNEL void reread() {
+    if constexpr (kWideSplatScalars) asm("" : "+m"(org), "+m"(inv), "+m"(inv_far), "+m"(org_far));
+    else asm("" : "+m"(org), "+m"(inv), "+m"(inv_far));
   }
 };
 
@@ -35,8 +50,11 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
   const float* rows = &node.lo[0][0];
   __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
   for (int a = 0; a < 3; ++a) {
-    const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.near_row[a]), r.org[a]), r.inv[a]);
-    const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.far_row[a]), r.org[a]), r.inv_far[a]);
+    const __m256 t_near =
+        _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.near_row[a]), splat(r.org[a])), splat(r.inv[a]));
+    const WideSplat& org_far = kWideSplatScalars ? r.org_far[a] : r.org[a];
+    const __m256 t_far =
+        _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.far_row[a]), splat(org_far)), splat(r.inv_far[a]));
     t0 = _mm256_max_ps(t_near, t0);
     t1 = _mm256_min_ps(t_far, t1);
   }

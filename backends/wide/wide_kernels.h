@@ -21,11 +21,13 @@ struct WideView {
 };
 
 // Closest hit (fills `hit` completely or leaves it a miss), closest hit with t and ids only (u, v and ng
-// left as a miss has them: Backend::intersect_ids) and any hit, for a valid ray.
+// left as a miss has them: Backend::intersect_ids) and any hit. Each checks its ray first (an invalid ray
+// misses: it must not sweep the tree), in the kernel's own instruction set, and takes the view by value (two
+// pointers in two registers): the backend's wrapper then only forwards its arguments.
 struct WideKernels {
-  bool (*intersect)(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
-  bool (*intersect_ids)(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
-  bool (*occluded)(const WideView& bvh, const Ray& ray, QueryStats* stats) = nullptr;
+  bool (*intersect)(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
+  bool (*intersect_ids)(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
+  bool (*occluded)(WideView bvh, const Ray& ray, QueryStats* stats) = nullptr;
 };
 
 // The kernels for scenes with the given primitive kinds (at least one) on `isa`.

@@ -9,6 +9,7 @@
 #include "backends/bvh/triangle_block.h"
 #include "backends/wide/wide_octant_rows.h"
 #include "backends/wide/wide_push_order.h"
+#include "backends/wide/wide_ray_check.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 
@@ -29,6 +30,12 @@ TWINRAY_KERNEL inline unsigned cmp_le_mask(__m256 a, __m256 b) {
 TWINRAY_KERNEL inline unsigned sign_mask(__m256i v) {
   return static_cast<unsigned>(_mm256_movepi32_mask(v));
 }
+
+// The ray's per-axis values as scalars, read by {1to8} broadcast operands (wide_box_test_256.inl).
+inline constexpr bool kWideSplatScalars = true;
+using WideSplat = float;
+TWINRAY_KERNEL inline float make_splat(float x) { return x; }
+TWINRAY_KERNEL inline __m256 splat(const float& x) { return _mm256_set1_ps(x); }
 
 #include "backends/wide/wide_box_test_256.inl"
 #include "backends/wide/wide_traversal.inl"

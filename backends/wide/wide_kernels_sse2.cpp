@@ -7,6 +7,7 @@
 #include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
 #include "backends/wide/wide_octant_rows.h"
+#include "backends/wide/wide_ray_check.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 
@@ -43,6 +44,9 @@ struct WideBoxRay {
     }
     rows = kWideOctantRows[static_cast<unsigned>(_mm_movemask_ps(inv_dir)) & 7u];
   }
+
+  // Tells the compiler the vectors may have changed in memory (wide_traversal.inl, reread_vectors).
+  void reread() { asm("" : "+m"(org), "+m"(inv), "+m"(inv_far)); }
 };
 
 // Ize's robust slab test (ray_box.h) on four boxes: columns [col, col + 4) of the node's rows. The near and

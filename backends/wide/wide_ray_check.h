@@ -1,6 +1,6 @@
 #pragma once
 // is_valid_ray (core/geometry/ray.h) on the ray's two 16-byte halves at once: the same conditions, each a
-// lane of an SSE2 comparison. Every bvh8 query checks its ray first (an invalid ray must not sweep the
+// lane of an SSE2 comparison. Every bvh8 kernel checks its ray first (an invalid ray must not sweep the
 // tree), and the scalar form's chain of branches cost about 35 instructions a query, 5% of a shadow ray's
 // any-hit query on the dragon (docs/bvh-backend.md, "Any-hit, eighth round").
 

@@ -43,6 +43,16 @@ TWINRAY_KERNEL inline std::uint64_t filled_slots(const WideNode& node) {
   return n;
 }
 
+// nodes[index] with the 224-byte stride as one multiplication: GCC spells a constant factor of 224 as
+// lea, sub and shl (three dependent operations, the same latency as imul's three cycles), two instructions
+// more per node visit.
+TWINRAY_KERNEL inline const WideNode& node_at(const WideNode* nodes, std::uint32_t index) {
+  static_assert(sizeof(WideNode) == 224);
+  std::uint64_t offset = index;
+  asm("imul $224, %0, %0" : "+r"(offset));
+  return *reinterpret_cast<const WideNode*>(reinterpret_cast<const char*>(nodes) + offset);
+}
+
 // Pops the next entry worth visiting (entry <= tmax). False when the stack is exhausted.
 TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, float tmax, std::uint32_t& ref) {
   while (size > 0) {
@@ -93,7 +103,7 @@ namespace wide_detail {
 // Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
 // there at their next uses instead of keeping copies in registers.
 TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
-  asm("" : "+m"(r.org), "+m"(r.inv), "+m"(r.inv_far));
+  r.reread();
 }
 
 // Closest hit; kStats: whether to count boxes and primitives into `stats` (non-null then). The timed queries
@@ -124,7 +134,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   std::uint32_t ref = 0;  // the root node
   for (;;) {
     if (!WideRef::is_leaf(ref)) {
-      const WideNode& node = bvh.nodes[ref];
+      const WideNode& node = node_at(bvh.nodes, ref);
       if constexpr (kStats) boxes_tested += filled_slots(node);
       reread_vectors(box_ray);  // as in occluded_impl: no copies live across the leaf tests
       const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
@@ -137,13 +147,16 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
       if constexpr (kStats) prims_tested += count;
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-        const std::uint32_t first_slot = first * kTriangleBlockLanes;
-        for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
+        // Block by block as in leaf_occluded.
+        const TriangleBlock* block = prims.triangle_blocks.data() + first;
+        std::uint32_t block_slot = first * kTriangleBlockLanes;
+        for (std::uint32_t remaining = count;;
+             remaining -= kTriangleBlockLanes, ++block, block_slot += kTriangleBlockLanes) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
           intersect_triangle_block_closest(
-              tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(count - k), ray.tmin, tmax,
+              tri_ray, *block, lane_mask(remaining), ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
-                const std::uint32_t slot = first_slot + k + lane;
+                const std::uint32_t slot = block_slot + lane;
                 const PrimitiveKey key = prims.triangle_keys[slot];
                 if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
                 hit.t = tmax = t;
@@ -157,6 +170,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
                 }
                 return tmax;
               });
+          if (remaining <= kTriangleBlockLanes) break;
         }
       } else if constexpr (kSpheres) {
         for (std::uint32_t i = first; i < first + count; ++i) {
@@ -199,13 +213,14 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-    for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
-      const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
-      if constexpr (kStats) prims_tested += in_block;
+    // Block by block, counting down the triangles left (at least one): most leaves are one block, which
+    // this tests without a loop counter, an index or a division.
+    const TriangleBlock* block = prims.triangle_blocks.data() + first;
+    for (std::uint32_t remaining = count;; remaining -= kTriangleBlockLanes, ++block) {
+      if constexpr (kStats) prims_tested += std::min(remaining, kTriangleBlockLanes);
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                       lane_mask(in_block), ray.tmin, ray.tmax) != 0)
-        return true;
+      if (intersect_triangle_block_any(tri_ray, *block, lane_mask(remaining), ray.tmin, ray.tmax) != 0) return true;
+      if (remaining <= kTriangleBlockLanes) break;
     }
   } else if constexpr (kSpheres) {
     for (std::uint32_t i = first; i < first + count; ++i) {
@@ -238,7 +253,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
-    const WideNode& node = bvh.nodes[index];
+    const WideNode& node = node_at(bvh.nodes, index);
     if constexpr (kStats) boxes_tested += filled_slots(node);
     // The box test reads the ray's broadcast vectors as memory operands (the load is part of the
     // arithmetic instruction): kept in registers instead, they are live across the leaf test's call,
@@ -247,21 +262,19 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     reread_vectors(box_ray);
     const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
+    // All hit inner children go on the stack before the leaves are tested, the lowest slot (largest area)
+    // on top, so it is the next visited: fewer values live across the leaf tests (GCC spilled and reloaded
+    // seven of them at each node with a hit leaf), and no branch on whether there are any. Bound: below a
+    // node at depth d the stack holds at most 7 d entries (each ancestor's pushed children but the one popped),
+    // so with the eight pushed here at most 7 (kWideMaxDepth - 1) + 8 <= kWideStackSize.
+    size += push_children(node, mask & ~leaves, stack + size);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
         break;
       }
     }
-    if (found) break;
-    const unsigned inner = mask & ~leaves;
-    if (inner != 0) {
-      // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
-      index = node.child[__builtin_ctz(inner)];
-      size += push_children(node, inner & (inner - 1), stack + size);
-      continue;
-    }
-    if (size == 0) break;
+    if (found || size == 0) break;
     index = stack[--size];
   }
 
@@ -275,14 +288,19 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 }  // namespace wide_detail
 
 template <bool kTriangles, bool kSpheres, bool kAttributes>
-TWINRAY_KERNEL bool wide_intersect(const WideView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+TWINRAY_KERNEL bool wide_intersect(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) {  // an invalid ray must not sweep the tree
+    hit = Hit{};
+    return false;
+  }
   if (stats != nullptr)
     return wide_detail::intersect_impl<kTriangles, kSpheres, true, kAttributes>(bvh, ray, hit, stats);
   return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
 template <bool kTriangles, bool kSpheres>
-TWINRAY_KERNEL bool wide_occluded(const WideView& bvh, const Ray& ray, QueryStats* stats) {
+TWINRAY_KERNEL bool wide_occluded(WideView bvh, const Ray& ray, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) return false;
   if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true>(bvh, ray, stats);
   return wide_detail::occluded_impl<kTriangles, kSpheres, false>(bvh, ray, nullptr);
 }
