@@ -31,11 +31,6 @@ struct StackEntry {
   float entry;  // where the ray enters the child's box
 };
 
-// The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
-TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
-  return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
-}
-
 // Boxes a node visit tests: its filled slots (empty ones have lo > hi). Only for statistics.
 TWINRAY_KERNEL inline std::uint64_t filled_slots(const WideNode& node) {
   std::uint64_t n = 0;
@@ -137,13 +132,14 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
       if constexpr (kStats) prims_tested += count;
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-        const std::uint32_t first_slot = first * kTriangleBlockLanes;
-        for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
+        const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
+        std::uint32_t block = leaf.block;
+        for (std::uint32_t lanes = leaf.lanes; lanes != 0; lanes >>= kTriangleBlockLanes, ++block) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
           intersect_triangle_block_closest(
-              tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes], lane_mask(count - k), ray.tmin, tmax,
+              tri_ray, prims.triangle_blocks[block], lanes & kWideBlockLaneMask, ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
-                const std::uint32_t slot = first_slot + k + lane;
+                const std::uint32_t slot = block * kTriangleBlockLanes + lane;
                 const PrimitiveKey key = prims.triangle_keys[slot];
                 if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
                 hit.t = tmax = t;
@@ -199,12 +195,13 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-    for (std::uint32_t k = 0; k < count; k += kTriangleBlockLanes) {
-      const std::uint32_t in_block = std::min(count - k, kTriangleBlockLanes);
-      if constexpr (kStats) prims_tested += in_block;
+    const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
+    std::uint32_t block = leaf.block;
+    for (std::uint32_t lanes = leaf.lanes; lanes != 0; lanes >>= kTriangleBlockLanes, ++block) {
+      const unsigned in_block = lanes & kWideBlockLaneMask;
+      if constexpr (kStats) prims_tested += static_cast<unsigned>(__builtin_popcount(in_block));
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[first + k / kTriangleBlockLanes],
-                                       lane_mask(in_block), ray.tmin, ray.tmax) != 0)
+      if (intersect_triangle_block_any(tri_ray, prims.triangle_blocks[block], in_block, ray.tmin, ray.tmax) != 0)
         return true;
     }
   } else if constexpr (kSpheres) {
