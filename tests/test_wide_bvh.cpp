@@ -315,6 +315,10 @@ TEST(WideBvh, OptionsAreValidated) {
   WideBuildOptions o;
   o.collapse.max_leaf_size = 33;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.collapse.max_leaf_size = 17;  // a leaf reference holds counts up to 16 (wide_leaf_ref.h)
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.collapse.max_leaf_size = 16;
+  EXPECT_NO_THROW(WideBackend{o});
   o = {};
   o.collapse.node_cost = 0.0f;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
@@ -323,6 +327,8 @@ TEST(WideBvh, OptionsAreValidated) {
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
   o = {};
   o.binary.max_leaf_size = 40;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.binary.max_leaf_size = 17;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
 }
 
