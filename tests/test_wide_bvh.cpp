@@ -66,6 +66,17 @@ void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
       }
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
       ASSERT_LE(count, WideRef::kMaxLeafCount);
+      if (!WideRef::is_sphere_leaf(ref)) {
+        // Leaves share blocks but never touch more of them than ceil(count / 4), the block tests an
+        // aligned leaf costs; the decode names the same lanes.
+        const std::uint32_t blocks_needed = (count + kTriangleBlockLanes - 1) / kTriangleBlockLanes;
+        EXPECT_EQ((first + count - 1) / kTriangleBlockLanes - first / kTriangleBlockLanes + 1, blocks_needed);
+        const WideTriangleLeaf leaf = wide_triangle_leaf(ref);
+        EXPECT_EQ(leaf.block, first / kTriangleBlockLanes);
+        EXPECT_EQ(static_cast<std::uint32_t>(__builtin_popcount(leaf.lanes)), count);
+        EXPECT_EQ(static_cast<std::uint32_t>(__builtin_ctz(leaf.lanes)), first % kTriangleBlockLanes);
+        ASSERT_LE(std::size_t{first} + count, prims.triangle_keys.size());
+      }
       for (std::uint32_t i = 0; i < count; ++i) {
         if (WideRef::is_sphere_leaf(ref)) {
           const StoredSphere& sp = prims.spheres[first + i];
@@ -75,7 +86,7 @@ void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
           }
           seen.insert({prims.sphere_keys[first + i].geom_id, prims.sphere_keys[first + i].prim_id});
         } else {
-          const std::uint32_t slot = first * kTriangleBlockLanes + i;
+          const std::uint32_t slot = first + i;
           for (std::uint32_t v = 0; v < 3; ++v) {
             const glm::vec3 p = prims.triangle_vertex(slot, v);
             for (int a = 0; a < 3; ++a) {
@@ -92,6 +103,10 @@ void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
   }
   EXPECT_EQ(visited, nodes.size()) << "every node reachable exactly once";
   EXPECT_EQ(seen.size(), g.primitive_count());
+  // Lanes no leaf holds are padding: the leaves' lanes are all the store's keyed ones.
+  EXPECT_EQ(std::count_if(prims.triangle_keys.begin(), prims.triangle_keys.end(),
+                          [](const PrimitiveKey& key) { return !key.is_padding(); }),
+            static_cast<std::ptrdiff_t>(g.triangle_count()));
   for (const TriangleMesh& mesh : g.meshes)
     for (std::uint32_t i = 0; i < mesh.indices.size(); ++i) EXPECT_EQ(seen.count({mesh.geom_id, i}), 1u);
   for (const Sphere& s : g.spheres) EXPECT_EQ(seen.count({s.geom_id, 0u}), 1u);
@@ -106,6 +121,53 @@ TEST(WideBvh, TreesAreWellFormed) {
     EXPECT_GT(tree.build_stats().nodes, 0u);
     EXPECT_LE(tree.build_stats().max_depth, kWideMaxDepth);
   }
+}
+
+// The packing rule of LeafPacking::kSharedBlocks on a sequence worked by hand: a leaf of up to four goes
+// into the oldest open block with room, a longer one starts in the newest block when it still touches only
+// ceil(count / 4) blocks from there, and a block's free lanes are padded by the last leaf put in it.
+TEST(WideBvh, SharedBlocksPackLeavesByTheRule) {
+  const SceneGeometry g = random_triangle_soup(18, 1);
+  std::vector<std::uint32_t> order(18);
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::vector<LeafToGather> leaves;
+  std::uint32_t at = 0;
+  for (const std::uint32_t count : {3u, 2u, 1u, 5u, 2u, 4u, 1u}) {
+    leaves.push_back({at, count, false});
+    at += count;
+  }
+  PrimitiveStore shared, aligned;
+  const std::vector<std::uint32_t> shared_at = gather_leaves(g, order, leaves, shared, LeafPacking::kSharedBlocks);
+  const std::vector<std::uint32_t> aligned_at = gather_leaves(g, order, leaves, aligned, LeafPacking::kBlockAligned);
+  // 3 opens block 0; 2 does not fit there and opens block 1; 1 fills block 0; 5 starts at lane 2 of block
+  // 1 (the newest) and ends in block 2; 2 opens block 3; 4 takes block 4 whole; 1 fills block 2.
+  EXPECT_EQ(shared_at, (std::vector<std::uint32_t>{0, 4, 3, 6, 12, 16, 11}));
+  ASSERT_EQ(shared.triangle_blocks.size(), 5u);
+  ASSERT_EQ(shared.triangle_keys.size(), 20u);
+  for (std::uint32_t slot = 0; slot < 20; ++slot)
+    EXPECT_EQ(shared.triangle_keys[slot].is_padding(), slot == 14 || slot == 15) << slot;
+  // Padding repeats the last triangle of the leaf before it (block 3's second lane).
+  EXPECT_EQ(shared.triangle_vertex(15, 0), shared.triangle_vertex(13, 0));
+  EXPECT_EQ(aligned_at, (std::vector<std::uint32_t>{0, 4, 8, 12, 20, 24, 28}));
+  EXPECT_EQ(aligned.triangle_blocks.size(), 8u);
+  // The same triangles either way, lane for lane.
+  for (std::size_t i = 0; i < leaves.size(); ++i)
+    for (std::uint32_t j = 0; j < leaves[i].count; ++j) {
+      const std::uint32_t a = aligned_at[i] + j, b = shared_at[i] + j;
+      EXPECT_EQ(aligned.triangle_keys[a].prim_id, shared.triangle_keys[b].prim_id);
+      EXPECT_EQ(shared.triangle_keys[b].prim_id, leaves[i].first + j);
+      for (std::uint32_t v = 0; v < 3; ++v) EXPECT_EQ(aligned.triangle_vertex(a, v), shared.triangle_vertex(b, v));
+    }
+}
+
+// On a soup, whose leaves are of one to four triangles, shared blocks are nearly full (one leaf per block
+// leaves about 40% of the lanes empty; docs/bvh-backend.md, "Memory").
+TEST(WideBvh, SharedBlocksAreNearlyFullOnASoup) {
+  const SceneGeometry g = random_triangle_soup(20000, 6);
+  WideBackend tree;
+  tree.build(g);
+  const PrimitiveStore& prims = tree.primitives();
+  EXPECT_GE(double(g.triangle_count()), 0.9 * double(prims.triangle_keys.size()));
 }
 
 TEST(WideBvh, OneTrianglePutsOneLeafUnderTheRoot) {
@@ -253,6 +315,10 @@ TEST(WideBvh, OptionsAreValidated) {
   WideBuildOptions o;
   o.collapse.max_leaf_size = 33;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.collapse.max_leaf_size = 17;  // a leaf reference holds counts up to 16 (wide_leaf_ref.h)
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.collapse.max_leaf_size = 16;
+  EXPECT_NO_THROW(WideBackend{o});
   o = {};
   o.collapse.node_cost = 0.0f;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
@@ -261,6 +327,8 @@ TEST(WideBvh, OptionsAreValidated) {
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
   o = {};
   o.binary.max_leaf_size = 40;
+  EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+  o.binary.max_leaf_size = 17;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
 }
 

@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 
 namespace twinray {
 
@@ -67,15 +68,15 @@ class TriangleIds {
   std::vector<std::uint32_t> first_;
 };
 
-// Copies one triangle leaf to the store, starting at `first_slot` (a block's first lane): the leaf's
-// triangles, then copies of its last one up to the end of its last block (padding, keyed kPadding).
+// Copies one triangle leaf to the store's slots [first_slot, end_slot): the leaf's triangles, then copies
+// of its last one up to `end_slot`, the end of its last block when no other leaf follows it there
+// (padding, keyed kPadding).
 void copy_triangle_leaf(const TriangleIds& ids, std::span<const std::uint32_t> leaf, std::uint32_t first_slot,
-                        PrimitiveStore& store) {
+                        std::uint32_t end_slot, PrimitiveStore& store) {
   const auto count = static_cast<std::uint32_t>(leaf.size());
-  const std::uint32_t slots = (count + kTriangleBlockLanes - 1) / kTriangleBlockLanes * kTriangleBlockLanes;
   const TriangleMesh* mesh = nullptr;
   std::uint32_t index = 0;
-  for (std::uint32_t j = 0; j < slots; ++j) {
+  for (std::uint32_t j = 0; j < end_slot - first_slot; ++j) {
     if (j < count) mesh = &ids.mesh_of(leaf[j], index);  // padding repeats the last triangle
     const glm::uvec3& tri = mesh->indices[index];
     const std::uint32_t slot = first_slot + j;
@@ -85,6 +86,115 @@ void copy_triangle_leaf(const TriangleIds& ids, std::span<const std::uint32_t> l
                                           : PrimitiveKey{PrimitiveKey::kPadding, PrimitiveKey::kPadding};
   }
 }
+
+constexpr std::uint64_t blocks_for(std::uint64_t lanes) {
+  return (lanes + kTriangleBlockLanes - 1) / kTriangleBlockLanes;
+}
+
+// Places triangle leaves in blocks, one leaf after another in the order given, and says where each one's
+// padding ends.
+//
+// kBlockAligned: every leaf starts a new block and pads the rest of its last block.
+// kSharedBlocks: a leaf never touches more blocks than ceil(count / 4), and within that rule goes where it
+// wastes no lane. The blocks left partly filled (at most kOpenBlocks of them, none more than kReachBack
+// blocks behind the newest) stay open: a leaf of up to four triangles goes into the oldest open block with
+// room for it (first fit), a longer one starts in the newest block if that one is open and the leaf then
+// still touches only ceil(count / 4) blocks, else a leaf starts a new block. A block that leaves the window
+// is closed: the last leaf put in it pads it to its end. A leaf so shares blocks only with leaves stored
+// near it (the wide tree numbers leaves node by node, so mostly its siblings and cousins), and the blocks
+// a node's leaves use stay within about a kilobyte of each other.
+//
+// Measured on the wide tree's leaves (docs/bvh-backend.md, "Memory"): on a 1M-triangle soup the blocks are
+// 58% full one leaf per block, 84% with next fit (one open block), 97% with four open blocks reaching eight
+// blocks back; more open blocks or a longer reach gain under 1%.
+class BlockPacker {
+ public:
+  static constexpr int kOpenBlocks = 4;
+  static constexpr std::uint64_t kReachBack = 8;
+
+  BlockPacker(LeafPacking packing, std::vector<std::uint32_t>& ends)
+      : window_(packing == LeafPacking::kSharedBlocks ? kOpenBlocks : 0), ends_(ends) {}
+
+  // The first slot of leaf `leaf` of `count` triangles (ends[leaf] is set when its padding is known).
+  std::uint64_t place(std::size_t leaf, std::uint32_t count) {
+    std::uint64_t first = 0;
+    if (!place_in_open_block(leaf, count, first)) {
+      std::uint64_t lane = 0;
+      // A longer leaf may start in the newest block, if it is open and the leaf still touches only
+      // ceil(count / 4) blocks from there.
+      if (open_count_ > 0 && open_[open_count_ - 1].block + 1 == blocks_ && count > kTriangleBlockLanes &&
+          open_[open_count_ - 1].used + count <= blocks_for(count) * kTriangleBlockLanes) {
+        lane = open_[open_count_ - 1].used;
+        --open_count_;  // the leaf fills it
+        --blocks_;
+      }
+      first = blocks_ * kTriangleBlockLanes + lane;
+      blocks_ += blocks_for(lane + count);
+      const std::uint64_t end = first + count;
+      ends_[leaf] = static_cast<std::uint32_t>(end);
+      if (end % kTriangleBlockLanes != 0)
+        open(Open{blocks_ - 1, static_cast<std::uint32_t>(end % kTriangleBlockLanes), leaf});
+    }
+    // Blocks too far behind the newest are closed.
+    int kept = 0;
+    for (int o = 0; o < open_count_; ++o) {
+      if (blocks_ - open_[o].block > kReachBack) close(open_[o]);
+      else open_[kept++] = open_[o];
+    }
+    open_count_ = kept;
+    return first;
+  }
+
+  // Closes the open blocks; returns the number of slots.
+  std::uint64_t finish() {
+    for (int o = 0; o < open_count_; ++o) close(open_[o]);
+    open_count_ = 0;
+    return blocks_ * kTriangleBlockLanes;
+  }
+
+ private:
+  struct Open {
+    std::uint64_t block;
+    std::uint32_t used;     // lanes 0..used-1 are taken
+    std::size_t last_leaf;  // the leaf that ends at lane used - 1: it pads the block if it is closed so
+  };
+
+  bool place_in_open_block(std::size_t leaf, std::uint32_t count, std::uint64_t& first) {
+    if (count > kTriangleBlockLanes) return false;
+    for (int o = 0; o < open_count_; ++o) {
+      Open& b = open_[o];
+      if (b.used + count > kTriangleBlockLanes) continue;
+      first = b.block * kTriangleBlockLanes + b.used;
+      b.used += count;
+      b.last_leaf = leaf;
+      ends_[leaf] = static_cast<std::uint32_t>(first + count);
+      if (b.used == kTriangleBlockLanes) {  // full: no longer open
+        for (int m = o + 1; m < open_count_; ++m) open_[m - 1] = open_[m];
+        --open_count_;
+      }
+      return true;
+    }
+    return false;
+  }
+
+  void open(const Open& b) {
+    if (window_ == 0) return close(b);
+    if (open_count_ == window_) {  // the oldest makes room
+      close(open_[0]);
+      for (int m = 1; m < open_count_; ++m) open_[m - 1] = open_[m];
+      --open_count_;
+    }
+    open_[open_count_++] = b;
+  }
+
+  void close(const Open& b) { ends_[b.last_leaf] = static_cast<std::uint32_t>((b.block + 1) * kTriangleBlockLanes); }
+
+  int window_;
+  std::vector<std::uint32_t>& ends_;
+  std::array<Open, kOpenBlocks> open_{};
+  int open_count_ = 0;
+  std::uint64_t blocks_ = 0;
+};
 
 // Leaves are copied in tree order, which reads the meshes in no particular order: on a large scene every
 // triangle costs two dependent cache misses (its indices, then its vertices), which dominated the gather
@@ -118,16 +228,24 @@ void prefetch_vertices(const TriangleIds& ids, std::span<const std::uint32_t> le
 }  // namespace
 
 std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::span<const std::uint32_t> prim_order,
-                                         std::span<const LeafToGather> leaves, PrimitiveStore& store) {
+                                         std::span<const LeafToGather> leaves, PrimitiveStore& store,
+                                         LeafPacking packing) {
   const TriangleIds ids(geometry);
   std::vector<std::uint32_t> offsets(leaves.size());
-  std::uint64_t slots = 0, spheres = 0;
+  // Per triangle leaf, the slot after its last padding lane (BlockPacker).
+  std::vector<std::uint32_t> ends(leaves.size());
+  BlockPacker packer(packing, ends);
+  std::uint64_t spheres = 0;
   for (std::size_t i = 0; i < leaves.size(); ++i) {
     const LeafToGather& leaf = leaves[i];
-    std::uint64_t& next = leaf.spheres ? spheres : slots;
-    offsets[i] = static_cast<std::uint32_t>(next);
-    next += leaf.spheres ? leaf.count : (leaf.count + kTriangleBlockLanes - 1) / kTriangleBlockLanes * kTriangleBlockLanes;
+    if (leaf.spheres) {
+      offsets[i] = static_cast<std::uint32_t>(spheres);
+      spheres += leaf.count;
+      continue;
+    }
+    offsets[i] = static_cast<std::uint32_t>(packer.place(i, leaf.count));
   }
+  const std::uint64_t slots = packer.finish();
   store = PrimitiveStore{};
   // Huge pages before resize() first touches them (bvh_builder_memory.h): the store was about 12 000 page
   // faults of a 1M-triangle build.
@@ -143,8 +261,8 @@ std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::spa
   store.sphere_keys.resize(spheres);
 
   const bool prefetch = ids.triangle_count() >= kPrefetchFrom;
-  // Leaves write disjoint ranges. A grain of 1024 leaves (a few thousand triangles) keeps the task
-  // overhead small against the copies.
+  // Leaves write disjoint ranges of slots (two leaves may share a block, never a lane). A grain of 1024
+  // leaves (a few thousand triangles) keeps the task overhead small against the copies.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     const auto ids_of = [&](std::size_t i) { return prim_order.subspan(leaves[i].first, leaves[i].count); };
     const auto ahead = [&](std::size_t i, std::size_t by) {
@@ -160,7 +278,7 @@ std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::spa
       if (ahead(i, kIndexAhead)) prefetch_indices(ids, ids_of(i + kIndexAhead));
       if (ahead(i, kVertexAhead)) prefetch_vertices(ids, ids_of(i + kVertexAhead));
       if (!leaf.spheres) {
-        copy_triangle_leaf(ids, leaf_ids, offsets[i], store);
+        copy_triangle_leaf(ids, leaf_ids, offsets[i], ends[i], store);
         continue;
       }
       for (std::uint32_t j = 0; j < leaf.count; ++j) {

@@ -22,14 +22,27 @@ struct LeafToGather {
   bool spheres;
 };
 
+// How triangle leaves are laid out in the store's blocks of four.
+enum class LeafPacking {
+  // Every leaf starts a block (the bvh backend's layout: its leaves are addressed by block).
+  kBlockAligned,
+  // A leaf may start at any lane where it touches no more blocks than ceil(count / 4), the fewest it can:
+  // a leaf of 1 to 3 triangles then shares its block with the leaves before it while lanes remain, so
+  // small leaves do not each leave a partly empty block behind (the bvh8 backend, whose leaf references
+  // name a first lane; wide_leaf_ref.h). Block tests per leaf are the same as with kBlockAligned.
+  kSharedBlocks,
+};
+
 // Replaces `store` with the leaves' primitives, leaf after leaf in the order given: a triangle leaf as a
-// run of whole blocks (its last block padded with copies of its last triangle, masked off by the
-// traversal), a sphere leaf as a run of spheres. Returns, per leaf, where it starts: the triangle slot of
-// its first block, or its first index in `spheres`.
+// run of lanes placed by `packing`, a sphere leaf as a run of spheres. The lanes no leaf holds (the end of
+// a block that the next leaf did not fit in) repeat the triangle before them and are keyed kPadding; the
+// traversal masks them off. Returns, per leaf, where it starts: its first triangle slot (with
+// kBlockAligned the first lane of a block), or its first index in `spheres`.
 //
-// Two passes: the offsets (a prefix sum over the leaves, so every array is allocated once at its final
-// size), then the copies, leaves in parallel. The layout does not depend on the thread count.
+// Two passes: the offsets (a sequential pass over the leaves, so every array is allocated once at its
+// final size), then the copies, leaves in parallel. The layout does not depend on the thread count.
 std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::span<const std::uint32_t> prim_order,
-                                         std::span<const LeafToGather> leaves, PrimitiveStore& store);
+                                         std::span<const LeafToGather> leaves, PrimitiveStore& store,
+                                         LeafPacking packing = LeafPacking::kBlockAligned);
 
 }  // namespace twinray

@@ -3,9 +3,10 @@
 //
 // Primitives are reordered once, at build time, so that the primitives of a leaf are adjacent in memory and
 // a leaf test streams through one contiguous block. Triangles are stored four to a TriangleBlock, in
-// structure-of-arrays form, so that one SIMD watertight test covers four triangles (triangle_block.h);
-// each leaf starts a new block, and the unused lanes of its last block repeat its last triangle and are
-// masked off. Spheres are stored as center and radius. Ids, which only the winning hit needs, live in
+// structure-of-arrays form, so that one SIMD watertight test covers four triangles (triangle_block.h).
+// In the bvh backend each leaf starts a new block; in bvh8 leaves share blocks, a leaf never touching more
+// blocks than it must (LeafPacking, primitive_gather.h). Lanes no leaf holds repeat the triangle before
+// them and are masked off. Spheres are stored as center and radius. Ids, which only the winning hit needs, live in
 // parallel arrays so they do not dilute the cache lines the tests read.
 //
 // Vertices are copied bit for bit from the SceneGeometry: the watertight test relies on neighbouring
@@ -54,8 +55,8 @@ struct PrimitiveKey {
 };
 
 struct PrimitiveStore {
-  // Triangle slot s is lane s % 4 of block s / 4. A triangle leaf's `first_prim` is a slot at the start of
-  // a block.
+  // Triangle slot s is lane s % 4 of block s / 4. A triangle leaf starts at a slot: the first lane of a
+  // block in bvh (BvhNode::first_prim), any lane in bvh8 (WideRef, wide_leaf_ref.h).
   std::vector<TriangleBlock> triangle_blocks;
   std::vector<PrimitiveKey> triangle_keys;  // per slot; padding lanes hold kPadding
   std::vector<StoredSphere> spheres;

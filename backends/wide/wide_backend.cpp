@@ -18,7 +18,7 @@ WideBackend::WideBackend(const WideBuildOptions& options, std::optional<Isa> isa
   validate(options_.binary);
   validate(options_.collapse);
   if (options_.binary.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
-    throw std::invalid_argument("bvh8: the binary tree's max_leaf_size must be at most 32");
+    throw std::invalid_argument("bvh8: the binary tree's max_leaf_size must be at most 16");
 }
 
 void WideBackend::build(const SceneGeometry& geometry) {
@@ -31,17 +31,18 @@ void WideBackend::build(const SceneGeometry& geometry) {
   std::vector<LeafToGather> leaves(tree.leaves.size());
   std::transform(tree.leaves.begin(), tree.leaves.end(), leaves.begin(),
                  [](const WideLeafRange& leaf) { return LeafToGather{leaf.first_prim, leaf.count, leaf.spheres}; });
-  const std::vector<std::uint32_t> offsets = gather_leaves(geometry, binary.prim_order, leaves, prims_);
+  // Leaves share blocks: a reference names a first slot, not a first block (wide_leaf_ref.h).
+  const std::vector<std::uint32_t> offsets =
+      gather_leaves(geometry, binary.prim_order, leaves, prims_, LeafPacking::kSharedBlocks);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin(); n < r.end(); ++n)
       for (std::uint32_t& child : tree.nodes[n].child) {
         if (!WideRef::is_leaf(child)) continue;
         const std::uint32_t index = child & ~WideRef::kLeafBit;
         const LeafToGather& leaf = leaves[index];
-        const std::uint32_t first = leaf.spheres ? offsets[index] : offsets[index] / kTriangleBlockLanes;
-        if (first > WideRef::kFirstMask)
-          throw std::length_error("bvh8: too many primitives for 25-bit leaf references (at most 2^25 blocks)");
-        child = WideRef::leaf(first, leaf.count, leaf.spheres);
+        if (offsets[index] > WideRef::kFirstMask)
+          throw std::length_error("bvh8: too many primitives for 26-bit leaf references (at most 2^26 slots)");
+        child = WideRef::leaf(offsets[index], leaf.count, leaf.spheres);
       }
   });
   nodes_ = std::move(tree.nodes);

@@ -25,7 +25,7 @@ void validate(const WideCollapseOptions& o) {
   if (!(o.padding_cost >= 0.0f) || !std::isfinite(o.padding_cost) || !(o.volume_cost >= 0.0f) || !std::isfinite(o.volume_cost))
     throw std::invalid_argument("wide bvh: padding_cost and volume_cost must be non-negative and finite");
   if (o.max_leaf_size < 1 || o.max_leaf_size > static_cast<int>(WideRef::kMaxLeafCount))
-    throw std::invalid_argument("wide bvh: max_leaf_size must be in 1..32, got " + std::to_string(o.max_leaf_size));
+    throw std::invalid_argument("wide bvh: max_leaf_size must be in 1..16, got " + std::to_string(o.max_leaf_size));
 }
 
 namespace {

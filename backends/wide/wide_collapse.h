@@ -48,7 +48,7 @@ struct WideCollapseOptions {
   // the root's (a box's weight is A + volume_cost V A(root) / V(root)): rays that start inside a box (on
   // the surfaces of an interior view) visit it whatever its area.
   float volume_cost = 2.0f;
-  // Largest leaf the collapse may form by merging a binary subtree (1..32 primitives); binary leaves are
+  // Largest leaf the collapse may form by merging a binary subtree (1..16 primitives); binary leaves are
   // kept whatever their size.
   int max_leaf_size = 8;
 };

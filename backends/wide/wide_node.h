@@ -12,8 +12,12 @@
 // direction), so traversal needs no count of children. Filled slots come first.
 //
 // A child reference is either the index of another node (top bit clear) or a leaf (top bit set) naming a
-// run of primitives in the PrimitiveStore: for triangles the first block of four and the number of
-// triangles, for spheres the first sphere and their number. Leaves never mix kinds.
+// run of primitives in the PrimitiveStore: for triangles the first slot (block * 4 + lane: leaves share
+// blocks, LeafPacking::kSharedBlocks in primitive_gather.h) and the number of triangles, for spheres the
+// first sphere and their number. Leaves never mix kinds. The encoding (WideRef) and what a triangle leaf
+// means to the traversal are in wide_leaf_ref.h.
+
+#include "backends/wide/wide_leaf_ref.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -33,23 +37,6 @@ struct alignas(32) WideNode {
   static constexpr std::size_t hi_row(int axis) { return lo_row(axis) + 3 * kWideWidth; }
 };
 static_assert(sizeof(WideNode) == 224, "seven 32-byte units");
-
-struct WideRef {
-  static constexpr std::uint32_t kLeafBit = 0x80000000u;
-  static constexpr std::uint32_t kSphereBit = 0x40000000u;
-  static constexpr int kCountShift = 25;                       // count - 1 in bits 25..29
-  static constexpr std::uint32_t kMaxLeafCount = 32;
-  static constexpr std::uint32_t kFirstMask = (1u << kCountShift) - 1;  // 32M blocks or spheres
-
-  static constexpr bool is_leaf(std::uint32_t ref) { return (ref & kLeafBit) != 0; }
-  static constexpr bool is_sphere_leaf(std::uint32_t ref) { return (ref & kSphereBit) != 0; }
-  static constexpr std::uint32_t count(std::uint32_t ref) { return ((ref >> kCountShift) & 31u) + 1; }
-  static constexpr std::uint32_t first(std::uint32_t ref) { return ref & kFirstMask; }
-  // `first`: for triangles the first block (not slot), for spheres the first sphere.
-  static constexpr std::uint32_t leaf(std::uint32_t first, std::uint32_t count, bool spheres) {
-    return kLeafBit | (spheres ? kSphereBit : 0u) | ((count - 1) << kCountShift) | first;
-  }
-};
 
 // The traversal stack holds at most (width - 1) entries per level below the root.
 inline constexpr std::size_t kWideMaxDepth = 128;

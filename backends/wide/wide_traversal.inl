@@ -31,11 +31,6 @@ struct StackEntry {
   float entry;  // where the ray enters the child's box
 };
 
-// The lanes of a triangle block that hold the leaf's triangles, given how many remain from the block's start.
-TWINRAY_KERNEL inline unsigned lane_mask(std::uint32_t remaining) {
-  return remaining >= kTriangleBlockLanes ? (1u << kTriangleBlockLanes) - 1 : (1u << remaining) - 1;
-}
-
 // Boxes a node visit tests: its filled slots (empty ones have lo > hi). Only for statistics.
 TWINRAY_KERNEL inline std::uint64_t filled_slots(const WideNode& node) {
   std::uint64_t n = 0;
@@ -147,14 +142,14 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
       if constexpr (kStats) prims_tested += count;
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-        // Block by block as in leaf_occluded.
-        const TriangleBlock* block = prims.triangle_blocks.data() + first;
-        std::uint32_t block_slot = first * kTriangleBlockLanes;
-        for (std::uint32_t remaining = count;;
-             remaining -= kTriangleBlockLanes, ++block, block_slot += kTriangleBlockLanes) {
+        const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
+        // Block by block, walked by pointer: a leaf has at least one lane, so the test comes before the check.
+        const TriangleBlock* block = prims.triangle_blocks.data() + leaf.block;
+        std::uint32_t block_slot = leaf.block * kTriangleBlockLanes;
+        for (std::uint32_t lanes = leaf.lanes;; ++block, block_slot += kTriangleBlockLanes) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
           intersect_triangle_block_closest(
-              tri_ray, *block, lane_mask(remaining), ray.tmin, tmax,
+              tri_ray, *block, lanes & kWideBlockLaneMask, ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
                 const std::uint32_t slot = block_slot + lane;
                 const PrimitiveKey key = prims.triangle_keys[slot];
@@ -170,7 +165,8 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
                 }
                 return tmax;
               });
-          if (remaining <= kTriangleBlockLanes) break;
+          lanes >>= kTriangleBlockLanes;
+          if (lanes == 0) break;
         }
       } else if constexpr (kSpheres) {
         for (std::uint32_t i = first; i < first + count; ++i) {
@@ -213,14 +209,16 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
-    // Block by block, counting down the triangles left (at least one): most leaves are one block, which
-    // this tests without a loop counter, an index or a division.
-    const TriangleBlock* block = prims.triangle_blocks.data() + first;
-    for (std::uint32_t remaining = count;; remaining -= kTriangleBlockLanes, ++block) {
-      if constexpr (kStats) prims_tested += std::min(remaining, kTriangleBlockLanes);
+    const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
+    // Block by block, walked by pointer: most leaves are one block, tested without a loop counter or an index.
+    const TriangleBlock* block = prims.triangle_blocks.data() + leaf.block;
+    for (std::uint32_t lanes = leaf.lanes;; ++block) {
+      const unsigned in_block = lanes & kWideBlockLaneMask;
+      if constexpr (kStats) prims_tested += static_cast<unsigned>(__builtin_popcount(in_block));
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, *block, lane_mask(remaining), ray.tmin, ray.tmax) != 0) return true;
-      if (remaining <= kTriangleBlockLanes) break;
+      if (intersect_triangle_block_any(tri_ray, *block, in_block, ray.tmin, ray.tmax) != 0) return true;
+      lanes >>= kTriangleBlockLanes;
+      if (lanes == 0) break;
     }
   } else if constexpr (kSpheres) {
     for (std::uint32_t i = first; i < first + count; ++i) {

@@ -1,0 +1,60 @@
+#pragma once
+// The child references of a wide node (wide_node.h), WideRef, and what a triangle leaf reference means to the
+// traversal: the blocks of the PrimitiveStore it tests and the lanes of each that hold its triangles.
+//
+// A reference names the leaf's first slot (block * 4 + lane) and its triangle count; leaves share blocks
+// (LeafPacking::kSharedBlocks, primitive_gather.h), so a leaf of one to three triangles may start at any lane
+// where it fits, and never touches more blocks than ceil(count / 4). The leaf's lanes, over its consecutive
+// blocks, are one run of `count` bits starting at bit `lane`: bits 4k..4k+3 are block k's lanes. The run is at
+// most 3 + 16 bits long (WideRef::kMaxLeafCount), so it fits a 32-bit mask.
+//
+// Walking a leaf:
+//     const WideTriangleLeaf leaf = wide_triangle_leaf(ref);
+//     std::uint32_t block = leaf.block;
+//     for (std::uint32_t lanes = leaf.lanes; lanes != 0; lanes >>= kTriangleBlockLanes, ++block)
+//       test block `block` on lanes (lanes & kWideBlockLaneMask); lane i is slot block * 4 + i.
+
+#include "backends/bvh/primitive_store.h"
+
+#include <cstdint>
+
+namespace twinray {
+
+struct WideRef {
+  static constexpr std::uint32_t kLeafBit = 0x80000000u;
+  static constexpr std::uint32_t kSphereBit = 0x40000000u;
+  // count - 1 in bits 26..29: leaves of at most 16 (the collapse forms leaves of at most 8 by default, and
+  // the binary tree's are of at most 3), which leaves 26 bits for a first slot: 64M triangles or spheres.
+  static constexpr int kCountShift = 26;
+  static constexpr std::uint32_t kMaxLeafCount = 16;
+  static constexpr std::uint32_t kFirstMask = (1u << kCountShift) - 1;
+
+  static constexpr bool is_leaf(std::uint32_t ref) { return (ref & kLeafBit) != 0; }
+  static constexpr bool is_sphere_leaf(std::uint32_t ref) { return (ref & kSphereBit) != 0; }
+  static constexpr std::uint32_t count(std::uint32_t ref) { return ((ref >> kCountShift) & (kMaxLeafCount - 1)) + 1; }
+  static constexpr std::uint32_t first(std::uint32_t ref) { return ref & kFirstMask; }
+  // `first`: for triangles the first slot (any lane of a block), for spheres the first sphere.
+  static constexpr std::uint32_t leaf(std::uint32_t first, std::uint32_t count, bool spheres) {
+    return kLeafBit | (spheres ? kSphereBit : 0u) | ((count - 1) << kCountShift) | first;
+  }
+};
+static_assert(WideRef::kMaxLeafCount << WideRef::kCountShift == WideRef::kSphereBit, "count bits below the sphere bit");
+
+inline constexpr std::uint32_t kWideBlockLaneMask = (1u << kTriangleBlockLanes) - 1;
+
+struct WideTriangleLeaf {
+  std::uint32_t block;  // the first block
+  std::uint32_t lanes;  // bit 4k + i: lane i of block `block + k` holds one of the leaf's triangles
+};
+
+static_assert(kTriangleBlockLanes - 1 + WideRef::kMaxLeafCount <= 32, "a leaf's lanes fit one 32-bit mask");
+
+// For a triangle leaf reference (WideRef::is_leaf and not is_sphere_leaf).
+[[gnu::always_inline]] constexpr WideTriangleLeaf wide_triangle_leaf(std::uint32_t ref) {
+  const std::uint32_t slot = WideRef::first(ref);
+  // count ones (count is 1..16).
+  const std::uint32_t run = (2u << (WideRef::count(ref) - 1)) - 1;
+  return {slot / kTriangleBlockLanes, run << (slot % kTriangleBlockLanes)};
+}
+
+}  // namespace twinray
