@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -31,6 +35,9 @@ TEST(BuildMemory, SmallArraysAreHeapMemoryAlignedForTheirElements) {
 }
 
 TEST(BuildMemory, LargeArraysStartOnAHugePageBoundary) {
+#if !(defined(__linux__) && defined(MADV_HUGEPAGE))
+  GTEST_SKIP() << "no MADV_HUGEPAGE here: large arrays take the heap path, aligned only for their elements";
+#endif
   const std::size_t n = (std::size_t{5} << 20) / sizeof(Element32) + 3;  // 5 MB and a bit: its own mapping
   BuildArray<Element32> a(n);
   ASSERT_NE(a.get(), nullptr);

@@ -24,6 +24,11 @@ WideBackend::WideBackend(const WideBuildOptions& options, std::optional<Isa> isa
 void WideBackend::build(const SceneGeometry& geometry) {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t n_triangles = geometry.triangle_count();
+  // Leaf references hold a 26-bit first slot (wide_leaf_ref.h). Padding lanes make the slots a few percent
+  // more than the triangles, so the exact check comes after the gather; this one refuses a scene that
+  // cannot fit before minutes of building it.
+  if (std::max(n_triangles, geometry.sphere_count()) > std::size_t{WideRef::kFirstMask} + 1)
+    throw std::length_error("bvh8: too many primitives for 26-bit leaf references (at most 2^26 triangles or spheres)");
   const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary, isa_);
   WideTree tree = collapse_to_wide(binary, options_.collapse);
 
@@ -32,8 +37,11 @@ void WideBackend::build(const SceneGeometry& geometry) {
   std::transform(tree.leaves.begin(), tree.leaves.end(), leaves.begin(),
                  [](const WideLeafRange& leaf) { return LeafToGather{leaf.first_prim, leaf.count, leaf.spheres}; });
   // Leaves share blocks: a reference names a first slot, not a first block (wide_leaf_ref.h).
+  // Into a new store, taken over only once every reference fits: a build that throws leaves the previous
+  // tree, store and kernels together.
+  PrimitiveStore prims;
   const std::vector<std::uint32_t> offsets =
-      gather_leaves(geometry, binary.prim_order, leaves, prims_, LeafPacking::kSharedBlocks);
+      gather_leaves(geometry, binary.prim_order, leaves, prims, LeafPacking::kSharedBlocks);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin(); n < r.end(); ++n)
       for (std::uint32_t& child : tree.nodes[n].child) {
@@ -45,6 +53,7 @@ void WideBackend::build(const SceneGeometry& geometry) {
         child = WideRef::leaf(offsets[index], leaf.count, leaf.spheres);
       }
   });
+  prims_ = std::move(prims);
   nodes_ = std::move(tree.nodes);
   nodes_.shrink_to_fit();
   bounds_ = binary.nodes.empty() ? Bounds3{} : Bounds3{binary.nodes[0].lo, binary.nodes[0].hi};

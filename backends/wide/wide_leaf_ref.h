@@ -24,7 +24,9 @@ struct WideRef {
   static constexpr std::uint32_t kLeafBit = 0x80000000u;
   static constexpr std::uint32_t kSphereBit = 0x40000000u;
   // count - 1 in bits 26..29: leaves of at most 16 (the collapse forms leaves of at most 8 by default, and
-  // the binary tree's are of at most 3), which leaves 26 bits for a first slot: 64M triangles or spheres.
+  // the binary tree's are of at most 3), which leaves 26 bits for a first slot: 2^26 slots (the triangles
+  // plus the padding lanes of partly filled blocks, a few percent) or 2^26 spheres; WideBackend::build
+  // refuses a larger scene with an error.
   static constexpr int kCountShift = 26;
   static constexpr std::uint32_t kMaxLeafCount = 16;
   static constexpr std::uint32_t kFirstMask = (1u << kCountShift) - 1;
