@@ -158,7 +158,12 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"sphere-stale-prim", "closest-mixed", Outcome::Fail, "which the scene does not have",
                               "closest-soup"},
                       BugCase{"mesh-vertex-offset", "closest-cornell", Outcome::Fail, "answers wrong", "closest-soup"},
-                      BugCase{"prune-break", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"}),
+                      BugCase{"prune-break", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"},
+                      // A tree in process-global vectors: only a second instance in the same process overwrites
+                      // it (the two-instances check's worker holds two).
+                      BugCase{"global-tree", "two-instances", Outcome::Fail,
+                              "with a second instance of the plugin built on scene 'grid' in the same process",
+                              "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -475,6 +480,16 @@ TEST(GradePlugins, BruteForcePassesTheEighthRoundsChecks) {
       grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "closest-soup-large", "ties-duplicates-reversed"});
   ASSERT_EQ(card.checks.size(), 3u);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+}
+
+// Instances of a correct plugin are independent: the brute-force plugin (whose state is all in its instance)
+// passes the two-instances check, its first instance answering for the soup after a second was built on a grid
+// in the same worker.
+TEST(GradePlugins, BruteForcePassesTheTwoInstancesCheck) {
+  const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"two-instances"});
+  ASSERT_EQ(card.checks.size(), 1u);
+  EXPECT_EQ(card.checks[0].outcome, Outcome::Pass) << terminal_check_line(card.checks[0]);
+  EXPECT_EQ(card.checks[0].figures.value("wrong", -1), 0) << terminal_check_line(card.checks[0]);
 }
 
 // A tree built lazily by the first query, without a lock (scotty bug 54), races only while the first calls

@@ -62,6 +62,8 @@ struct CheckContext {
   std::chrono::steady_clock::time_point deadline;
   // Builds of this plugin that failed in earlier checks (failed_builds.h); none remembered when null.
   FailedBuilds* failed_builds = nullptr;
+  // The scene of the check's second instance (CheckSpec::second_scene), loaded; null when it has none.
+  const GradeScene* second_scene = nullptr;
   // False when the deadline is the suite's time_budget running out before the check's own time_limit.
   bool own_deadline = true;
   mutable int builds = 0;  // plugin builds started by this check

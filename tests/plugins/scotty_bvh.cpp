@@ -129,8 +129,8 @@
 //  69 TIE_PRIM_FIRST    equal t resolves to the lower prim_id first, then the lower geom_id (the key packed
 //                       as prim << 32 | geom): wrong only where a later geometry's copy has the lower prim_id
 //  70 GLOBAL_TREE       the tree lives in process-global vectors ("there is only one scene"): a second
-//                       instance in the same process overwrites the first's (not caught: every check's instance
-//                       has a worker process of its own; docs/grading.md, "Bugs the grader does not catch")
+//                       instance in the same process overwrites the first's (caught by the two-instances check,
+//                       whose worker holds two instances; docs/grading.md, "Two instances in one process")
 //  71 BUCKET_MAX_DROP   the builder sorts primitives into bucket lists; the largest centroid lands in bucket
 //                       nb (index = nb * (c - lo) / extent, unclamped; the vector has nb + 1 lists "to be
 //                       safe"), and the copy back stops at nb - 1: that primitive is lost at every split
