@@ -484,12 +484,15 @@ TEST(GradePlugins, BruteForcePassesTheEighthRoundsChecks) {
 
 // Instances of a correct plugin are independent: the brute-force plugin (whose state is all in its instance)
 // passes the two-instances check, its first instance answering for the soup after a second was built on a grid
-// in the same worker.
+// in the same worker, and the second for the grid.
 TEST(GradePlugins, BruteForcePassesTheTwoInstancesCheck) {
   const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"two-instances"});
   ASSERT_EQ(card.checks.size(), 1u);
   EXPECT_EQ(card.checks[0].outcome, Outcome::Pass) << terminal_check_line(card.checks[0]);
   EXPECT_EQ(card.checks[0].figures.value("wrong", -1), 0) << terminal_check_line(card.checks[0]);
+  // The second instance answered for its own scene as well.
+  EXPECT_GT(card.checks[0].figures.value("second_instance_rays", 0), 0) << terminal_check_line(card.checks[0]);
+  EXPECT_EQ(card.checks[0].figures.value("second_instance_wrong", -1), 0) << terminal_check_line(card.checks[0]);
 }
 
 // A tree built lazily by the first query, without a lock (scotty bug 54), races only while the first calls
