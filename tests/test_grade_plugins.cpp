@@ -136,7 +136,34 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"geom-id-8bit", "closest-mixed", Outcome::Fail, "geom_id", "closest-soup"},
                       // Slivers dropped and the rest renumbered: every triangle after the first sliver is named
                       // wrong (procedural:sliver-soup).
-                      BugCase{"sliver-drop", "closest-slivers", Outcome::Fail, "answers wrong", "closest-soup"}),
+                      BugCase{"sliver-drop", "closest-slivers", Outcome::Fail, "answers wrong", "closest-soup"},
+                      // The eighth round's. Vertex indices in 16 bits: only a mesh of more than 65,536 vertices
+                      // (a soup of 22,000 triangles). Ties resolved by prim_id before geom_id: only where a
+                      // later geometry's copy has the lower prim_id (procedural:duplicates-reversed). The sphere
+                      // root picked by its sign before the interval check: only rays whose tmin lies inside the
+                      // sphere. Mailboxes shared by threads: only concurrent calls.
+                      BugCase{"vertex-index-16bit", "closest-soup-large", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"tie-prim-first", "ties-duplicates-reversed", Outcome::Fail, "answers wrong",
+                              "ties-duplicates"},
+                      BugCase{"sphere-root-by-zero", "spheres-sizes", Outcome::Fail, "answers wrong",
+                              "closest-soup"},
+                      BugCase{"shared-mailbox", "thread-safety-soup", Outcome::Fail, "concurrent answers differ",
+                              "closest-soup"},
+                      BugCase{"bucket-max-drop", "closest-soup", Outcome::Fail, "answers wrong", "build-empty"},
+                      BugCase{"bucket-nan-extent", "build-identical", Outcome::Crash, "SIGSEGV", "closest-soup"},
+                      BugCase{"leaf-array-8", "closest-coincident", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"box-unit-dir", "ray-interval-cornell", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"child-swap-flags", "closest-cornell", Outcome::Fail, "plugin reports a miss",
+                              "build-empty"},
+                      BugCase{"sphere-stale-prim", "closest-mixed", Outcome::Fail, "which the scene does not have",
+                              "closest-soup"},
+                      BugCase{"mesh-vertex-offset", "closest-cornell", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"prune-break", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"},
+                      // A tree in process-global vectors: only a second instance in the same process overwrites
+                      // it (the two-instances check's worker holds two).
+                      BugCase{"global-tree", "two-instances", Outcome::Fail,
+                              "with a second instance of the plugin built on scene 'grid' in the same process",
+                              "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -443,6 +470,29 @@ TEST(GradePlugins, BruteForcePassesTheSixthRoundsChecks) {
       grade(TWINRAY_TEST_BRUTE_PLUGIN, {"ray-interval-cornell", "deep-tree-nest-capped", "closest-mixed"});
   ASSERT_EQ(card.checks.size(), 3u);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+}
+
+// The checks made for the eighth round's bugs fail no correct BVH: the brute-force plugin passes the sphere rays
+// whose tmin lies inside the sphere, the soup of 66,000 vertices and the reversed duplicates (it honours the tie
+// rule, lower geom_id first).
+TEST(GradePlugins, BruteForcePassesTheEighthRoundsChecks) {
+  const Scorecard card =
+      grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "closest-soup-large", "ties-duplicates-reversed"});
+  ASSERT_EQ(card.checks.size(), 3u);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+}
+
+// Instances of a correct plugin are independent: the brute-force plugin (whose state is all in its instance)
+// passes the two-instances check, its first instance answering for the soup after a second was built on a grid
+// in the same worker, and the second for the grid.
+TEST(GradePlugins, BruteForcePassesTheTwoInstancesCheck) {
+  const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"two-instances"});
+  ASSERT_EQ(card.checks.size(), 1u);
+  EXPECT_EQ(card.checks[0].outcome, Outcome::Pass) << terminal_check_line(card.checks[0]);
+  EXPECT_EQ(card.checks[0].figures.value("wrong", -1), 0) << terminal_check_line(card.checks[0]);
+  // The second instance answered for its own scene as well.
+  EXPECT_GT(card.checks[0].figures.value("second_instance_rays", 0), 0) << terminal_check_line(card.checks[0]);
+  EXPECT_EQ(card.checks[0].figures.value("second_instance_wrong", -1), 0) << terminal_check_line(card.checks[0]);
 }
 
 // A tree built lazily by the first query, without a lock (scotty bug 54), races only while the first calls

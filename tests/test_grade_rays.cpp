@@ -79,6 +79,21 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
   // Every kind is present: neither all hits nor all misses.
   EXPECT_GT(hits, 200u);
   EXPECT_LT(hits, 550u);
+  // The rays whose tmin lies inside the sphere (between its roots) all hit, beyond tmin: the far root.
+  std::size_t inside_interval = 0;
+  for (const Ray& r : rays) {
+    if (r.tmin == 0.0f) continue;
+    ++inside_interval;
+    Hit h;
+    ASSERT_TRUE(brute->intersect(r, h));
+    EXPECT_GT(h.t, r.tmin);
+    Ray from_zero = r;
+    from_zero.tmin = 0.0f;
+    Hit near;
+    ASSERT_TRUE(brute->intersect(from_zero, near));
+    EXPECT_LT(near.t, r.tmin);  // the near root (at least) is before tmin
+  }
+  EXPECT_GE(inside_interval, 600u / 8);
 }
 
 // Rays whose interval ends exactly at a crossing (interval_ends.h): on the Cornell box's walls and the integer

@@ -27,6 +27,14 @@ TEST(NamedScene, ProceduralScenesHaveTheDocumentedSizes) {
   ASSERT_EQ(dup.geometry.meshes.size(), 2u);
   EXPECT_EQ(dup.geometry.meshes[0].triangle_count(), 20u);
   EXPECT_EQ(dup.geometry.meshes[1].indices, dup.geometry.meshes[0].indices);
+  // The reversed duplicates: mesh 1 lists mesh 0's triangles backwards, each with its vertices in order, so
+  // mesh 0's triangle k is mesh 1's 2n - 1 - k (and n - 1 - k): a lower prim_id for k >= n / 2.
+  const Scene rev = load_named_scene("procedural:duplicates-reversed:10:2");
+  ASSERT_EQ(rev.geometry.meshes.size(), 2u);
+  ASSERT_EQ(rev.geometry.meshes[1].indices.size(), 20u);
+  EXPECT_EQ(rev.geometry.meshes[0].indices, dup.geometry.meshes[0].indices);
+  for (std::size_t k = 0; k < 20; ++k)
+    EXPECT_EQ(rev.geometry.meshes[1].indices[19 - k], rev.geometry.meshes[0].indices[k]) << k;
   // Every scene has a shape per geometry id and a material, like a loaded scene.
   EXPECT_EQ(dup.shapes.size(), 2u);
   EXPECT_FALSE(dup.materials.empty());

@@ -151,13 +151,17 @@ class IsolatedPluginBackend::Impl {
   const std::string& name() const { return name_; }
   BackendTraits traits() const;
   void build(const SceneGeometry& geometry);
-  BuildStats build_stats() const { return stats_; }
+  BuildStats build_stats() const { return stats_[instance_]; }
   bool intersect(const Ray& ray, Hit& hit, QueryStats* stats);
   bool occluded(const Ray& ray, QueryStats* stats);
   void intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats);
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats);
 
   void set_deadline(std::optional<Clock::time_point> deadline) { limits_.deadline = deadline; }
+  void use_instance(std::size_t index) {
+    if (index >= pw::kInstances) throw std::logic_error(name_ + ": the worker holds only two plugin instances");
+    instance_ = static_cast<std::uint32_t>(index);
+  }
   const PluginLimits& limits() const { return limits_; }
   std::string captured_output() const { return worker_ ? worker_->output() : std::string(); }
   std::optional<PluginFailure> failure() const;
@@ -245,10 +249,11 @@ class IsolatedPluginBackend::Impl {
   // (the worker died between calls: a thread of the plugin crashed after the last answer) is shutdown()'s.
   mutable std::atomic<bool> failure_reported_{false};
   bool shut_down_ = false;
-  bool built_ = false;
-
-  PrimitiveIndex primitives_;
-  BuildStats stats_;
+  // Per plugin instance in the worker (use_instance): which the calls go to, and each one's build.
+  std::uint32_t instance_ = 0;
+  std::array<bool, pw::kInstances> built_{};
+  std::array<PrimitiveIndex, pw::kInstances> primitives_;
+  std::array<BuildStats, pw::kInstances> stats_;
 
   // Last: destroyed first, so the monitor thread (which calls on_worker_exit) has stopped before any member
   // it touches goes away.
@@ -380,6 +385,7 @@ void IsolatedPluginBackend::Impl::round_trip(const Lease& lease, pw::Op op, std:
   pw::Channel& c = lease.channel();
   c.op = op;
   c.count = count;
+  c.instance = instance_;
   // The worker counts the rays of this request from 0 upward; it is idle now, so the word is ours to reset.
   c.current.store(0, std::memory_order_relaxed);
   post(lease);
@@ -699,10 +705,10 @@ PluginFailureDetails IsolatedPluginBackend::Impl::classify_death(const WorkerTer
 
 void IsolatedPluginBackend::Impl::build(const SceneGeometry& geometry) {
   throw_if_failed();
-  if (built_) throw std::logic_error(name_ + ": build() called twice (the ABI allows one build per instance)");
-  built_ = true;
+  if (built_[instance_]) throw std::logic_error(name_ + ": build() called twice (the ABI allows one build per instance)");
+  built_[instance_] = true;
   const auto start = Clock::now();
-  primitives_ = PrimitiveIndex(geometry);
+  primitives_[instance_] = PrimitiveIndex(geometry);
 
   // The scene goes after the control block, at a page boundary so the worker can map exactly that part.
   const std::size_t offset = round_up(control_file_.size(), page_size());
@@ -732,19 +738,20 @@ void IsolatedPluginBackend::Impl::build(const SceneGeometry& geometry) {
     default: fail_from_status(lease, Stage::Build);
   }
 
-  stats_ = BuildStats{};
-  stats_.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  stats_.triangles = geometry.triangle_count();
-  stats_.spheres = geometry.sphere_count();
-  stats_.built_triangles = geometry.has_triangles();
-  stats_.built_spheres = geometry.has_spheres();
+  BuildStats& built = stats_[instance_];
+  built = BuildStats{};
+  built.build_seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  built.triangles = geometry.triangle_count();
+  built.spheres = geometry.sphere_count();
+  built.built_triangles = geometry.has_triangles();
+  built.built_spheres = geometry.has_spheres();
   const pw::BuildStatsWire wire = c.build_stats;
   if (wire.reported != 0) {
-    stats_.memory_bytes = wire.memory_bytes;
-    stats_.nodes = wire.nodes;
-    stats_.leaves = wire.leaves;
-    stats_.max_depth = wire.max_depth;
-    stats_.sah_cost = wire.sah_cost;
+    built.memory_bytes = wire.memory_bytes;
+    built.nodes = wire.nodes;
+    built.leaves = wire.leaves;
+    built.max_depth = wire.max_depth;
+    built.sah_cost = wire.sah_cost;
   }
 }
 
@@ -773,7 +780,7 @@ bool IsolatedPluginBackend::Impl::intersect(const Ray& ray, Hit& hit, QueryStats
   const pw::RayResult r = c.results[0];  // one copy: what is checked is what is used
   add_stats(stats, 1, c.nodes_visited, c.primitives_tested);
   if (!found_of(lease, Stage::Intersect, r.found)) return false;
-  if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, 0, r.hit);
+  if (!primitives_[instance_].exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, 0, r.hit);
   hit = from_plugin_hit(r.hit);
   return true;
 }
@@ -833,7 +840,7 @@ void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span
       rays, pw::Op::Intersect, Stage::Intersect, stats, [&](std::size_t i) { hits[i] = Hit{}; },
       [&](const Lease& lease, std::uint32_t k, std::size_t i, pw::RayResult r) {
         if (!found_of(lease, Stage::Intersect, r.found)) return;
-        if (!primitives_.exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
+        if (!primitives_[instance_].exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
         hits[i] = from_plugin_hit(r.hit);
       });
 }
@@ -924,6 +931,7 @@ void IsolatedPluginBackend::set_deadline(std::optional<std::chrono::steady_clock
   impl_->set_deadline(deadline);
 }
 const PluginLimits& IsolatedPluginBackend::limits() const { return impl_->limits(); }
+void IsolatedPluginBackend::use_instance(std::size_t index) { impl_->use_instance(index); }
 std::string IsolatedPluginBackend::captured_output() const { return impl_->captured_output(); }
 std::optional<PluginFailure> IsolatedPluginBackend::failure() const { return impl_->failure(); }
 std::string IsolatedPluginBackend::sandbox_description() const { return impl_->sandbox_description(); }

@@ -46,6 +46,11 @@ class IsolatedPluginBackend final : public Backend {
   // Not to be called concurrently with queries.
   void set_deadline(std::optional<std::chrono::steady_clock::time_point> deadline);
   const PluginLimits& limits() const;
+  // Which of the worker's two plugin instances the following calls (build, queries, build_stats) go to: 0, the
+  // one created at start (the default), or 1, a second instance of the same library in the same process,
+  // created by its first build. For the grader's two-instances check (the ABI promises that instances in one
+  // process are independent). Not to be called concurrently with other calls.
+  void use_instance(std::size_t index);
 
   // What the plugin printed so far (stdout and stderr interleaved), truncated to PluginLimits::output_bytes.
   std::string captured_output() const;

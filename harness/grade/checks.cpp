@@ -35,6 +35,13 @@ PluginInstance CheckContext::built_plugin(double* build_seconds) const {
   const auto seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   try {
     plugin->build(scene.geometry());
+    if (second_scene != nullptr) {
+      // The two-instances check: a second instance in the same worker, built on another scene; every later
+      // call goes to the first again, whose answers must not have changed (docs/plugin-abi.md).
+      plugin->use_instance(1);
+      plugin->build(second_scene->geometry());
+      plugin->use_instance(0);
+    }
   } catch (...) {
     if (first && failed_builds != nullptr) failed_builds->remember(spec, std::current_exception(), seconds(), own_deadline);
     throw;
@@ -62,6 +69,14 @@ std::optional<CheckContext::AloneAnswer> CheckContext::answer_alone(const Ray& r
 
 void CheckContext::confirm_replay(CheckVerdict& v, const Ray& ray, bool any_hit, const Hit& batch_hit,
                                   bool batch_occluded) const {
+  if (second_scene != nullptr) {
+    // `twinray trace` builds one instance: only the whole check builds the second one beside it.
+    v.detail += fmt::format("; with a second instance of the plugin built on scene '{}' in the same process "
+                            "(instances must be independent: no tree or other mutable state shared between them)",
+                            spec.second_scene);
+    v.reproduce = grade_command();
+    return;
+  }
   const std::optional<AloneAnswer> alone = answer_alone(ray);
   if (!alone) return;
   const bool same = any_hit ? alone->occluded == batch_occluded : same_bits(alone->hit, batch_hit);

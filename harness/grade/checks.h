@@ -47,6 +47,8 @@ class PluginInstance {
 
   const Backend& operator*() const { return *backend_; }
   const IsolatedPluginBackend* operator->() const { return backend_.get(); }
+  // Which of the worker's instances the following calls go to (IsolatedPluginBackend::use_instance).
+  void use_instance(std::size_t index) { backend_->use_instance(index); }
   // Ends the worker; afterwards the instance answers nothing. Never throws.
   void end();
 
@@ -62,6 +64,8 @@ struct CheckContext {
   std::chrono::steady_clock::time_point deadline;
   // Builds of this plugin that failed in earlier checks (failed_builds.h); none remembered when null.
   FailedBuilds* failed_builds = nullptr;
+  // The scene of the check's second instance (CheckSpec::second_scene), loaded; null when it has none.
+  GradeScene* second_scene = nullptr;
   // False when the deadline is the suite's time_budget running out before the check's own time_limit.
   bool own_deadline = true;
   mutable int builds = 0;  // plugin builds started by this check

@@ -164,8 +164,11 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
       const glm::vec3 across2 = glm::cross(away, across);
       return s.center + s.radius * (d.x * across + d.y * across2);
     };
-    switch ((i / spheres.size()) % 7) {
+    switch ((i / spheres.size()) % 8) {
       case 0: rays.push_back(make(from, disc_point() - from)); break;  // from outside at a point of the disc
+      case 7:  // the same with tmin = 1, at the disc inside the sphere: between the roots, only the far one counts
+        rays.push_back(make(from, disc_point() - from, 1.0f));
+        break;
       case 6: {  // the same from far away, 2,000 to 20,000 radii
         const glm::vec3 far = s.center + (2e3f + 1.8e4f * rng.next_float()) * s.radius * away;
         rays.push_back(make(far, disc_point() - far));

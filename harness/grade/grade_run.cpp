@@ -180,7 +180,10 @@ Scorecard run_grade(const GradeSettings& settings) {
   // Scenes are loaded on first use and dropped after their last check (a million-triangle scene and its
   // reference backends should not stay for the rest of the suite).
   std::map<std::string, std::size_t> last_use;
-  for (std::size_t i = 0; i < checks.size(); ++i) last_use[checks[i]->scene] = i;
+  for (std::size_t i = 0; i < checks.size(); ++i) {
+    last_use[checks[i]->scene] = i;
+    if (!checks[i]->second_scene.empty()) last_use[checks[i]->second_scene] = i;
+  }
   std::map<std::string, std::unique_ptr<GradeScene>> scenes;
   std::map<std::string, const CheckResult*> done;  // by name; points into card.checks (reserved below)
   card.checks.reserve(checks.size());
@@ -189,6 +192,8 @@ Scorecard run_grade(const GradeSettings& settings) {
   for (std::size_t i = 0; i < checks.size(); ++i) {
     const CheckSpec& spec = *checks[i];
     const SuiteScene& scene_spec = suite.scenes.at(spec.scene);
+    const bool second_needs_shared_data =
+        !spec.second_scene.empty() && suite.scenes.at(spec.second_scene).needs_shared_data;
     CheckResult r;
     r.name = spec.name;
     r.category = spec.category;
@@ -209,10 +214,11 @@ Scorecard run_grade(const GradeSettings& settings) {
       unmet += (unmet.empty() ? "" : ", ") + need + " (" + std::string(to_string(it->second->outcome)) + ")";
       unmet_uncounted = unmet_uncounted || (it->second->outcome == Outcome::Skipped && it->second->max_points == 0.0);
     }
-    if (scene_spec.needs_shared_data && !shared_data) {
+    if ((scene_spec.needs_shared_data || second_needs_shared_data) && !shared_data) {
       r.outcome = Outcome::Skipped;
       r.max_points = 0.0;
-      r.detail = fmt::format("scene '{}' needs the shared data folder (set TWINRAY_SHARED); not counted", spec.scene);
+      r.detail = fmt::format("scene '{}' needs the shared data folder (set TWINRAY_SHARED); not counted",
+                             scene_spec.needs_shared_data ? spec.scene : spec.second_scene);
     } else if (!unmet.empty()) {
       r.outcome = Outcome::Skipped;
       r.detail = "needs " + unmet + " to pass first";
@@ -226,6 +232,11 @@ Scorecard run_grade(const GradeSettings& settings) {
       std::unique_ptr<GradeScene>& scene = scenes[spec.scene];
       if (!scene) scene = std::make_unique<GradeScene>(scene_spec, suite);
       CheckContext ctx{spec, *scene, env, {}, &failed_builds};
+      if (!spec.second_scene.empty()) {
+        std::unique_ptr<GradeScene>& second = scenes[spec.second_scene];
+        if (!second) second = std::make_unique<GradeScene>(suite.scenes.at(spec.second_scene), suite);
+        ctx.second_scene = second.get();
+      }
       execute(ctx, settings.image_dir, r, card.images, run_end, card.time_budget.value_or(0.0));
       if (!r.required && r.failed() && spec.requirement == Requirement::IfClaimed)
         r.detail += " (not claimed by the plugin: reported, not required)";
@@ -233,6 +244,7 @@ Scorecard run_grade(const GradeSettings& settings) {
     r.points = r.outcome == Outcome::Pass ? r.max_points : 0.0;
     r.seconds = seconds_since(check_start);
     if (last_use[spec.scene] == i) scenes.erase(spec.scene);
+    if (!spec.second_scene.empty() && last_use[spec.second_scene] == i) scenes.erase(spec.second_scene);
     if (spec.category == Category::Performance || spec.category == Category::TreeQuality)
       card.performance[spec.name] = r.figures;
     card.checks.push_back(std::move(r));

@@ -112,7 +112,7 @@ std::vector<crosscheck::RayKind> ray_kinds_of(const JsonNode& node) {
 std::vector<std::string_view> parameters_of(Category c) {
   switch (c) {
     case Category::Build: return {"count", "reference"};
-    case Category::ClosestHit: return {"rays", "count", "reference", "image"};
+    case Category::ClosestHit: return {"rays", "count", "reference", "image", "second_scene"};
     case Category::AnyHit: return {"rays", "count", "reference"};
     case Category::RayInterval: return {"rays", "count", "reference"};
     case Category::AxisAligned: return {"count", "reference"};
@@ -233,6 +233,10 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
     c.image = n->json().get<bool>();
     if (c.image && std::find(c.rays.begin(), c.rays.end(), crosscheck::RayKind::Camera) == c.rays.end())
       n->fail("an image needs camera rays (\"rays\": \"camera\")");
+  }
+  if (auto n = node.optional_member("second_scene")) {
+    c.second_scene = n->as_string();
+    if (suite.scenes.count(c.second_scene) == 0) n->fail(fmt::format("no scene '{}' in \"scenes\"", c.second_scene));
   }
   if (auto n = node.optional_member("threads")) c.threads = static_cast<int>(n->as_integer(2, 64));
   if (auto n = node.optional_member("repeat")) c.repeat = static_cast<int>(n->as_integer(1, 100));

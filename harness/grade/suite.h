@@ -54,6 +54,10 @@ struct CheckSpec {
   std::string name;
   Category category = Category::ClosestHit;
   std::string scene;  // SuiteScene::id
+  // closest-hit, "second_scene": a second instance of the plugin, in the same worker process as the one the
+  // check queries, is built on this scene after the check's own build and before any query (the two-instances
+  // check: instances in one process must be independent). Empty: one instance.
+  std::string second_scene;
   double points = 0.0;
   Requirement requirement = Requirement::Required;
   Visibility visibility = Visibility::Visible;

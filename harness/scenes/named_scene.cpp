@@ -9,6 +9,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -104,6 +105,15 @@ SceneGeometry duplicated_soup(std::size_t n, std::uint64_t seed) {
   return g;
 }
 
+// duplicated_soup with mesh 1's triangles listed in reverse order: mesh 0's triangle k (and n + k) is mesh 1's
+// 2n - 1 - k and n - 1 - k, so for k >= n / 2 mesh 1's copy has the lower prim_id. The tie rule compares
+// geom_id first and still names geom 0, prim k; a plugin that compares prim_id first names mesh 1's copy.
+SceneGeometry reversed_duplicated_soup(std::size_t n, std::uint64_t seed) {
+  SceneGeometry g = duplicated_soup(n, seed);
+  std::reverse(g.meshes[1].indices.begin(), g.meshes[1].indices.end());
+  return g;
+}
+
 // Spheres at the scales where a sphere test loses its digits: tiny (radius 1e-3), ordinary, huge (radius
 // 1e4, its surface passing near the others), and far from the origin (1e4 away).
 SceneGeometry sphere_sizes() {
@@ -174,6 +184,14 @@ const std::vector<Generator>& generators() {
          a.expect_count(2, 2, "N:SEED");
          return duplicated_soup(static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles / 4, "N")),
                                 static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
+       }},
+      {{"duplicates-reversed", "N:SEED",
+        "duplicates with mesh 1's triangles listed in reverse order (a later geometry's copy has the lower prim_id)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(2, 2, "N:SEED");
+         return reversed_duplicated_soup(
+             static_cast<std::size_t>(a.integer(0, 1, kMaxProceduralTriangles / 4, "N")),
+             static_cast<std::uint64_t>(a.integer(1, 0, std::numeric_limits<long long>::max(), "SEED")));
        }},
       {{"sphere-mesh", "SUBDIVISIONS[:CX:CY:CZ:RADIUS]",
         "a closed, watertight tessellated sphere of 20 * 4^SUBDIVISIONS triangles (default centre 0, radius 1)"},

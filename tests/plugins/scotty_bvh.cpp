@@ -122,6 +122,41 @@
 //  66 MT_DOUBLE_WT      Moller-Trumbore in double, no epsilon, and still claims watertightness
 //  67 STACK_RING_32     a traversal stack of 32 entries used as a ring: when full, a push overwrites the oldest
 //
+// The eighth red-team round's:
+//
+//  68 VERTEX_INDEX_16BIT vertex indices read as 16 bits ("the assignment's OBJs have under 65k vertices"):
+//                       a triangle that uses vertex 65536 + i is built and tested with vertex i
+//  69 TIE_PRIM_FIRST    equal t resolves to the lower prim_id first, then the lower geom_id (the key packed
+//                       as prim << 32 | geom): wrong only where a later geometry's copy has the lower prim_id
+//  70 GLOBAL_TREE       the tree lives in process-global vectors ("there is only one scene"): a second
+//                       instance in the same process overwrites the first's (caught by the two-instances check,
+//                       whose worker holds two instances; docs/grading.md, "Two instances in one process")
+//  71 BUCKET_MAX_DROP   the builder sorts primitives into bucket lists; the largest centroid lands in bucket
+//                       nb (index = nb * (c - lo) / extent, unclamped; the vector has nb + 1 lists "to be
+//                       safe"), and the copy back stops at nb - 1: that primitive is lost at every split
+//  72 BUCKET_NAN_EXTENT no guard for a flat centroid axis: 0 / 0 = NaN, cast to int, indexes the buckets far
+//                       out of range (a flat node: a wall, a grid, identical triangles)
+//  73 LEAF_ARRAY_8      a leaf holds at most 8 primitive indices (a fixed array in the node); a leaf the
+//                       builder cannot split keeps its first 8 and drops the rest
+//  74 BOX_UNIT_DIR      the slab test works in distances along the normalised direction, compared with tmin,
+//                       tmax and the closest t, which are in units of |dir|
+//  75 CHILD_SWAP_FLAGS  children ordered nearer first by swapping indices and entry times, but not the two
+//                       "box hit" flags (a missed box's entry stays tmin)
+//  76 SPHERE_STALE_PRIM one hit record per thread reused by every test; the sphere test fills in t and geom_id
+//                       but not prim_id ("a sphere has no triangles"): a sphere hit keeps the prim_id of the
+//                       thread's last triangle hit
+//  77 MESH_VERTEX_OFFSET the meshes merged into one vertex array, each mesh's indices offset by the triangles
+//                       of the meshes before it instead of their vertices
+//  78 PRUNE_BREAK       "the stack is sorted by distance": the first popped node that starts beyond the closest
+//                       hit ends the traversal (break instead of continue)
+//  79 INDEX_IN_FLOAT    the leaf's first primitive index kept in a float (a GPU-style float4 node): exact up to
+//                       2^24 (not caught: docs/grading.md, "Bugs the grader does not catch", says why)
+//  80 SPHERE_ROOT_BY_ZERO the sphere's root picked by its sign (the near one unless it is behind the origin),
+//                       then checked against [tmin, tmax]: a ray whose tmin lies between the roots misses
+//  81 SHARED_MAILBOX    mailboxing in the instance: every primitive remembers the id of the last ray that tested
+//                       it, and ray ids count per thread from 1, so another thread's ray of the same number skips
+//                       the primitive
+//
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
 // TWINRAY_PLUGIN_HONOURS_TIES; it counts its traversal. It reports its SAH cost in the unit model of
@@ -247,6 +282,9 @@ struct BBox {
       }
 #if BUG(46)
       const double inv = g_inv_dir[a];
+#elif BUG(74)
+      // The inverse of the normalised direction: near and far are distances, not multiples of |dir|.
+      const double inv = ray.inv_dir[a] * std::sqrt(dot(ray.dir, ray.dir));
 #else
       const double inv = ray.inv_dir[a];
 #endif
@@ -290,6 +328,12 @@ struct Trace {
   const void* primitive = nullptr;  // what was hit, for the attributes computed once at the end
 };
 
+#if BUG(76)
+// The prim_id of this thread's hit record, which every triangle test that hits writes and the sphere test
+// leaves as it is.
+thread_local twinray_id g_record_prim = 0;
+#endif
+
 // The smallest t a hit may have and the largest, as the primitive tests see them.
 double lowest_t(const Ray& ray) {
 #if BUG(5)
@@ -321,7 +365,12 @@ struct Primitive {
   twinray_id slot = 0;                     // its place in the builder's (reordered) array, for bug 28
   twinray_id kept = 0;                     // its place among the triangles the builder kept, for bug 59
 
+#if BUG(68)
+  // "Our meshes have fewer than 65,536 vertices": indices kept as 16 bits.
+  Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(static_cast<std::uint16_t>(mesh->indices[3 * index + k]))); }
+#else
   Vec3 vertex(int k) const { return load(mesh->positions + 3 * static_cast<std::size_t>(mesh->indices[3 * index + k])); }
+#endif
 
   BBox bbox() const {
     BBox b;
@@ -430,6 +479,9 @@ struct Primitive {
     tr.geom &= 0xFFu;  // the top 8 bits of a packed (geom << 24 | prim) word
 #endif
     tr.prim = BUG(28) ? slot : (BUG(59) ? kept : index);
+#if BUG(76)
+    g_record_prim = tr.prim;
+#endif
     tr.primitive = this;
     return tr;
   }
@@ -441,7 +493,11 @@ struct Primitive {
     tr.hit = true;
     tr.t = t;
     tr.geom = BUG(58) ? sphere->geom_id & 0xFFu : sphere->geom_id;
+#if BUG(76)
+    tr.prim = g_record_prim;  // the record's prim_id, from the thread's last triangle hit
+#else
     tr.prim = 0;
+#endif
     tr.primitive = this;
     return tr;
   }
@@ -483,6 +539,13 @@ struct Primitive {
     const double flen = std::sqrt(dot(f, f));
     const double q = -(b + std::copysign(std::sqrt(disc), b));
     const double r0 = q == 0.0 ? 0.0 : (flen - r) * (flen + r) / q, r1 = q == 0.0 ? 0.0 : q / a;
+#if BUG(80)
+    // "The near root, unless it is behind the origin", and then the interval.
+    const double near = static_cast<float>(std::min(r0, r1)), far = static_cast<float>(std::max(r0, r1));
+    const double t = near >= 0.0 ? near : far;
+    if (counts(ray, t, tmax)) return sphere_hit(t);
+    return tr;
+#endif
 #if BUG(48)
     for (const double root : {std::min(r0, r1)}) {  // "the near root is the hit"
 #else
@@ -504,8 +567,13 @@ struct Primitive {
 bool precedes(const Trace& a, const Trace& b) {
   if (!b.hit) return a.hit;
   if (a.t != b.t) return a.t < b.t;
+#if BUG(69)
+  if (a.prim != b.prim) return a.prim < b.prim;  // the key (prim << 32 | geom), compared as one number
+  return a.geom < b.geom;
+#else
   if (a.geom != b.geom) return a.geom < b.geom;
   return a.prim < b.prim;
+#endif
 }
 
 struct Node {
@@ -527,10 +595,32 @@ struct StackEntry {
 std::size_t leaf_count(const Node& node) {
 #if BUG(35)
   return node.size & 7u;  // three bits of a packed field
+#elif BUG(73)
+  return std::min<std::size_t>(node.size, 8);  // the node's array of primitive indices holds 8
 #else
   return node.size;
 #endif
 }
+
+#if BUG(70)
+// "There is only one scene": the tree lives in the process, not in the instance.
+std::vector<Primitive>& global_primitives() {
+  static std::vector<Primitive> v;
+  return v;
+}
+std::vector<Node>& global_nodes() {
+  static std::vector<Node> v;
+  return v;
+}
+#endif
+
+// The meshes merged into one vertex array and one index array (bug 77), and a mesh record for each that
+// points into them.
+struct MergedMeshes {
+  std::vector<float> positions;
+  std::vector<twinray_id> indices;
+  std::vector<twinray_mesh> meshes;
+};
 
 constexpr std::size_t kMaxDepth = 96;
 constexpr std::size_t kBuckets = 12;
@@ -538,6 +628,8 @@ constexpr std::size_t kMaxLeafSize = 4;
 
 class BVH {
  public:
+  MergedMeshes merged;  // bug 77's copy of the meshes
+
   void build(std::vector<Primitive>&& prims) {
     primitives_ = std::move(prims);
 #if BUG(54)
@@ -559,6 +651,9 @@ class BVH {
     nodes_.reserve(2 * primitives_.size());
     build_node(0, primitives_.size(), 0);
     for (std::size_t k = 0; k < primitives_.size(); ++k) primitives_[k].slot = static_cast<twinray_id>(k);
+#if BUG(81)
+    mailbox_.assign(primitives_.size(), 0);
+#endif
   }
 
   // Closest hit; counts nodes whose box was tested and primitives tested.
@@ -610,6 +705,10 @@ class BVH {
 #if BUG(61)
     float last_u = 0.0f, last_v = 0.0f;  // the primitive test's out arguments
 #endif
+#if BUG(81)
+    thread_local std::uint32_t rays_of_this_thread = 0;
+    const std::uint32_t ray_id = ++rays_of_this_thread;  // "unique enough"
+#endif
     std::size_t sp = 0, hits = 0;
     stack[sp++] = {0, root_times[0], 0};
     while (sp > 0) {
@@ -620,7 +719,11 @@ class BVH {
 #endif
       // A node that starts beyond the best hit cannot improve it; the slack keeps an equal-t hit in another
       // subtree (a tie) reachable although its box entry is computed in double and t is rounded to float.
+#if BUG(78)
+      if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) break;  // "everything below it is farther"
+#else
       if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) continue;
+#endif
 #if BUG(2)
       if (hits > e.hits_at) continue;  // "the near child already found something"
 #endif
@@ -628,6 +731,13 @@ class BVH {
       if (node.is_leaf()) {
         std::size_t i = node.start;
         while (i < leaf_end(node)) {
+#if BUG(81)
+          if (mailbox_[i] == ray_id) {  // "this ray has tested it already"
+            ++i;
+            continue;
+          }
+          mailbox_[i] = ray_id;
+#endif
           ++stats.primitives_tested;
 #if BUG(41)
           const Trace t = primitives_[i].hit(ray, e.stale || !closest.hit ? bound : closest.t);
@@ -688,6 +798,24 @@ class BVH {
       const auto push = [&](const StackEntry& e) { stack[sp++ % stack.size()] = e; };  // full: the oldest goes
 #else
       const auto push = [&](const StackEntry& e) { stack[sp++] = e; };
+#endif
+#if BUG(75)
+      // Nearer child first: order the two by where the ray enters them (the hit flags stay where they were).
+      std::size_t first = node.l, second = node.r;
+      double first_t = tl[0], second_t = tr[0];
+      if (second_t < first_t) {
+        std::swap(first, second);
+        std::swap(first_t, second_t);
+      }
+      if (hl && hr) {
+        push({second, second_t, hits, e.stale});
+        push({first, first_t, hits, e.stale});
+      } else if (hl) {
+        push({first, first_t, hits, e.stale});
+      } else if (hr) {
+        push({second, second_t, hits, e.stale});
+      }
+      continue;
 #endif
       if (hl && hr) {
 #if BUG(60)
@@ -837,7 +965,11 @@ class BVH {
   std::size_t new_node(const BBox& box, std::size_t start, std::size_t size) {
     Node n;
     n.bbox = box;
+#if BUG(79)
+    n.start = static_cast<std::size_t>(static_cast<float>(start));  // the .w of a float4
+#else
     n.start = start;
+#endif
     n.size = size;
     nodes_.push_back(n);
     return nodes_.size() - 1;
@@ -890,7 +1022,9 @@ class BVH {
         if (axis != random_axis) continue;
 #endif
         const double lo = centroids.min[axis], extent = centroids.max[axis] - lo;
+#if !BUG(72)
         if (!(extent > 0.0)) continue;
+#endif
 #if BUG(51)
         // Every primitive's centroid is a candidate plane, and each candidate's two boxes are built afresh.
         for (std::size_t candidate = start; candidate < end; ++candidate) {
@@ -911,7 +1045,13 @@ class BVH {
         std::array<std::size_t, kBuckets> counts{};
         const auto bucket_of = [&](const Primitive& p) {
           const double c = p.bbox().center()[axis];
+#if BUG(72)
+          int b = static_cast<int>(static_cast<double>(kBuckets) * (c - lo) / extent);
+          if (b == static_cast<int>(kBuckets)) b = static_cast<int>(kBuckets) - 1;  // the largest centroid
+          return static_cast<std::size_t>(b);
+#else
           return std::min(kBuckets - 1, static_cast<std::size_t>(static_cast<double>(kBuckets) * (c - lo) / extent));
+#endif
         };
         for (std::size_t i = start; i < end; ++i) {
           const std::size_t k = bucket_of(primitives_[i]);
@@ -947,6 +1087,23 @@ class BVH {
         mid = start + left.size();
         right_end = mid + right.size();
       }
+#elif BUG(71)
+      // The primitives sorted into bucket lists and copied back bucket by bucket. A centroid at the top of the
+      // range lands in list kBuckets (there is one more list "to be safe"), which the copy back never reaches;
+      // the slots it leaves keep what they held before.
+      const double lo = centroids.min[best_axis], extent = centroids.max[best_axis] - lo;
+      const auto split_bucket = static_cast<std::size_t>(std::llround((best_split - lo) / extent * static_cast<double>(kBuckets)));
+      std::vector<std::vector<Primitive>> lists(kBuckets + 1);
+      for (std::size_t i = start; i < end; ++i) {
+        const double c = primitives_[i].bbox().center()[best_axis];
+        lists[static_cast<std::size_t>(static_cast<double>(kBuckets) * (c - lo) / extent)].push_back(primitives_[i]);
+      }
+      std::size_t k = start, left_end = start;
+      for (std::size_t b = 0; b < kBuckets; ++b) {
+        for (const Primitive& p : lists[b]) primitives_[k++] = p;
+        if (b + 1 == split_bucket) left_end = k;
+      }
+      if (left_end > start && left_end < end) mid = left_end;
 #else
       const auto it = std::partition(primitives_.begin() + static_cast<std::ptrdiff_t>(start),
                                      primitives_.begin() + static_cast<std::ptrdiff_t>(end), [&](const Primitive& p) {
@@ -992,14 +1149,22 @@ class BVH {
     return index;
   }
 
+#if BUG(70)
+  std::vector<Primitive>& primitives_ = global_primitives();
+  std::vector<Node>& nodes_ = global_nodes();
+#else
   std::vector<Primitive> primitives_;
   std::vector<Node> nodes_;
+#endif
   std::size_t depth_ = 0;
 #if BUG(8)
   mutable std::vector<StackEntry> stack_;
 #endif
 #if BUG(54)
   mutable bool built_ = false;
+#endif
+#if BUG(81)
+  mutable std::vector<std::uint32_t> mailbox_;  // the last ray id that tested each primitive
 #endif
 };
 
@@ -1042,9 +1207,40 @@ void* scotty_create() { return new (std::nothrow) BVH(); }
 
 void scotty_destroy(void* self) { delete static_cast<BVH*>(self); }
 
+#if BUG(77)
+// One vertex array and one index array for the whole scene ("fewer pointers to chase"); mesh m's indices are
+// offset by the triangles of the meshes before it, where it should be their vertices.
+const twinray_mesh* merge_meshes(const twinray_geometry* g, MergedMeshes& merged) {
+  std::size_t offset = 0;
+  for (std::size_t m = 0; m < g->mesh_count; ++m) {
+    const twinray_mesh& mesh = g->meshes[m];
+    merged.positions.insert(merged.positions.end(), mesh.positions, mesh.positions + 3 * mesh.vertex_count);
+    for (std::size_t i = 0; i < 3 * mesh.triangle_count; ++i)
+      merged.indices.push_back(static_cast<twinray_id>(mesh.indices[i] + offset));
+    offset += mesh.triangle_count;
+  }
+  merged.positions.insert(merged.positions.end(), {0.0f, 0.0f, 0.0f});  // room past the last vertex
+  std::size_t first = 0;
+  for (std::size_t m = 0; m < g->mesh_count; ++m) {
+    twinray_mesh copy = g->meshes[m];
+    copy.positions = merged.positions.data();
+    copy.vertex_count = merged.positions.size() / 3;
+    copy.indices = merged.indices.data() + 3 * first;
+    merged.meshes.push_back(copy);
+    first += copy.triangle_count;
+  }
+  return merged.meshes.data();
+}
+#endif
+
 int scotty_build(void* self, const twinray_geometry* g, char* error, std::size_t capacity) {
   try {
     std::vector<Primitive> prims;
+#if BUG(77)
+    twinray_geometry merged_geometry = *g;
+    merged_geometry.meshes = merge_meshes(g, static_cast<BVH*>(self)->merged);
+    g = &merged_geometry;
+#endif
 #if BUG(59)
     twinray_id kept = 0;
 #endif

@@ -101,10 +101,34 @@ void QueryServer::serve(std::size_t index) {
   }
 }
 
+void* QueryServer::instance_for(Channel& c) {
+  const std::uint32_t index = c.instance;
+  if (index >= kInstances) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, "the request names a plugin instance the worker cannot have");
+    return nullptr;
+  }
+  if (selves_[index] == nullptr && c.op == Op::Build) {
+    // A second instance, created on this query thread, in plugin code's usual guard. Instances are only
+    // created by builds, which twinray never runs concurrently with anything else on the same worker.
+    guarded(c, [&] { selves_[index] = plugin_->table().create(); });
+    if (c.status == Status::Ok && selves_[index] == nullptr) {
+      c.status = Status::BuildFailed;
+      copy_message(c.message, sizeof c.message, "create() returned NULL for a second instance");
+    }
+  }
+  if (selves_[index] == nullptr && c.status == Status::Ok) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, "the request names a plugin instance that was never built");
+  }
+  return c.status == Status::Ok ? selves_[index] : nullptr;
+}
+
 void QueryServer::run_queries(Channel& c, bool closest) {
   const std::uint32_t n = std::min<std::uint32_t>(c.count, static_cast<std::uint32_t>(kChunkRays));
   const twinray_plugin_v1& table = plugin_->table();
-  const void* self = plugin_->self();
+  const void* self = instance_for(c);
+  if (self == nullptr) return;
   twinray_query_stats stats{};
   guarded(c, [&] {
     for (std::uint32_t k = 0; k < n; ++k) {
@@ -126,6 +150,9 @@ void QueryServer::run_queries(Channel& c, bool closest) {
 }
 
 void QueryServer::run_build(Channel& c) {
+  void* self = instance_for(c);
+  if (self == nullptr) return;
+  std::vector<twinray_mesh>& meshes = meshes_[c.instance];
   // The scene, mapped read-only and never unmapped: the plugin may keep pointers into it until destroy.
   const std::size_t bytes = c.geometry_bytes;
   void* mapping = bytes > 0 ? mmap(nullptr, bytes, PROT_READ, MAP_SHARED, control_fd_, static_cast<off_t>(c.geometry_offset))
@@ -140,7 +167,7 @@ void QueryServer::run_build(Channel& c) {
   std::memcpy(&header, base, sizeof header);
   const std::size_t tables = sizeof header + header.mesh_count * sizeof(MeshRecord) + header.sphere_count * sizeof(twinray_sphere);
   const bool counts_fit = header.mesh_count < bytes && header.sphere_count < bytes && tables <= bytes;
-  meshes_.clear();
+  meshes.clear();
   bool fits = counts_fit;
   for (std::uint64_t m = 0; fits && m < header.mesh_count; ++m) {
     MeshRecord r;
@@ -153,7 +180,7 @@ void QueryServer::run_build(Channel& c) {
     mesh.vertex_count = r.vertex_count;
     mesh.indices = reinterpret_cast<const twinray_id*>(base + r.indices_offset);
     mesh.triangle_count = r.triangle_count;
-    meshes_.push_back(mesh);
+    meshes.push_back(mesh);
   }
   if (!fits) {
     c.status = Status::SetupFailed;
@@ -161,14 +188,13 @@ void QueryServer::run_build(Channel& c) {
     return;
   }
   twinray_geometry geometry;
-  geometry.meshes = meshes_.data();
-  geometry.mesh_count = meshes_.size();
+  geometry.meshes = meshes.data();
+  geometry.mesh_count = meshes.size();
   geometry.spheres = reinterpret_cast<const twinray_sphere*>(base + sizeof header + header.mesh_count * sizeof(MeshRecord));
   geometry.sphere_count = header.sphere_count;
   geometry.geom_id_end = header.geom_id_end;
 
   const twinray_plugin_v1& table = plugin_->table();
-  void* self = plugin_->self();
   char error[sizeof c.message] = {};
   int result = TWINRAY_ERROR;
   twinray_build_stats stats{};
@@ -192,6 +218,9 @@ void QueryServer::run_build(Channel& c) {
     }
   }
   // From here on the plugin cannot open any file: whatever it needed to read, it has read while building.
+  // (Once: a second instance is built under the filter the first build installed.)
+  if (query_filter_installed_) return;
+  query_filter_installed_ = true;
   const std::string filter_error = install_query_filter_();
   if (!filter_error.empty()) {
     c.status = Status::SetupFailed;
@@ -202,6 +231,8 @@ void QueryServer::run_build(Channel& c) {
 void QueryServer::run_destroy(Channel& c) {
   try {
     c.in_plugin.store(1, std::memory_order_relaxed);
+    // The second instance first, then the first (its PluginLibrary's): the reverse of creation.
+    if (selves_[1] != nullptr) plugin_->table().destroy(selves_[1]);
     plugin_->table().destroy(plugin_->self());
   } catch (...) {
     std::abort();  // reported as an abort in stage "destroy"

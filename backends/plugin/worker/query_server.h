@@ -22,12 +22,18 @@ class QueryServer {
   // Starts the channel threads. They answer requests only once the parent has seen Startup::Ready, which is
   // after set_plugin.
   void start_threads();
-  void set_plugin(PluginLibrary& plugin) { plugin_ = &plugin; }
+  void set_plugin(PluginLibrary& plugin) {
+    plugin_ = &plugin;
+    selves_[0] = plugin.self();
+  }
 
  private:
   [[noreturn]] void serve(std::size_t index);
   std::uint32_t wait_for_request(Channel& c, std::uint32_t seen);
   void run_build(Channel& c);
+  // The instance a request is for, or nullptr (the status says why) when it names none there is: instance 1
+  // is created (table.create) by the first Build addressed to it.
+  void* instance_for(Channel& c);
   void run_queries(Channel& c, bool closest);
   [[noreturn]] void run_destroy(Channel& c);
 
@@ -35,8 +41,11 @@ class QueryServer {
   int control_fd_;
   std::function<std::string()> install_query_filter_;
   PluginLibrary* plugin_ = nullptr;
-  // The scene as the plugin sees it; valid until destroy (the ABI's promise).
-  std::vector<twinray_mesh> meshes_;
+  // The instances (worker_protocol.h, kInstances); [0] is the PluginLibrary's own.
+  void* selves_[kInstances] = {};
+  // The scene as each instance sees it; valid until destroy (the ABI's promise).
+  std::vector<twinray_mesh> meshes_[kInstances];
+  bool query_filter_installed_ = false;
 };
 
 }  // namespace twinray::plugin_worker
