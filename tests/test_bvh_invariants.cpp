@@ -86,7 +86,7 @@ struct TreeChecker {
     EXPECT_LE(count, static_cast<std::uint32_t>(bvh.options().max_leaf_size)) << "leaf " << index;
     const bool sphere = node.is_sphere_leaf();
     const PrimitiveStore& store = bvh.primitives();
-    const std::vector<PrimitiveKey>& keys = sphere ? store.sphere_keys : store.triangle_keys;
+    const auto& keys = sphere ? store.sphere_keys : store.triangle_keys;
     ASSERT_LE(std::size_t{node.first_prim()} + count, keys.size());
     if (!sphere) {
       EXPECT_EQ(node.first_prim() % kTriangleBlockLanes, 0u) << "a triangle leaf starts a block";

@@ -247,14 +247,10 @@ std::vector<std::uint32_t> gather_leaves(const SceneGeometry& geometry, std::spa
   }
   const std::uint64_t slots = packer.finish();
   store = PrimitiveStore{};
-  // Huge pages before resize() first touches them (bvh_builder_memory.h): the store was about 12 000 page
-  // faults of a 1M-triangle build.
-  const auto advise = [](auto& v, std::size_t n) {
-    v.reserve(n);
-    advise_huge_pages(v.data(), n * sizeof(v[0]));
-  };
-  advise(store.triangle_blocks, slots / kTriangleBlockLanes);
-  advise(store.triangle_keys, slots);
+  // The store's arrays are build memory (PrimitiveStore::Array): huge pages from 4 MiB on (the store was
+  // about 12 000 page faults of a 1M-triangle build on small pages), and resize() leaves them
+  // uninitialised: every slot is written below, padding lanes included (copy_triangle_leaf writes up to a
+  // leaf's end slot, and BlockPacker makes the end slots cover every lane of every block).
   store.triangle_blocks.resize(slots / kTriangleBlockLanes);
   store.triangle_keys.resize(slots);
   store.spheres.resize(spheres);

@@ -13,6 +13,8 @@
 // triangles seeing identical coordinates for shared vertices, and the bvh must produce exactly the t, u, v
 // of the brute-force oracle.
 
+#include "backends/bvh/bvh_builder_memory.h"
+
 #include <glm/vec3.hpp>
 
 #include <cstddef>
@@ -55,12 +57,18 @@ struct PrimitiveKey {
 };
 
 struct PrimitiveStore {
+  // On build memory (bvh_builder_memory.h): large arrays on huge pages, and resize() leaves the elements
+  // uninitialised, since the gather writes every one of them (value-initialising them was a zero-fill of
+  // the whole store on one thread before the parallel gather wrote it again).
+  template <class T>
+  using Array = std::vector<T, BuildAllocator<T>>;
+
   // Triangle slot s is lane s % 4 of block s / 4. A triangle leaf starts at a slot: the first lane of a
   // block in bvh (BvhNode::first_prim), any lane in bvh8 (WideRef, wide_leaf_ref.h).
-  std::vector<TriangleBlock> triangle_blocks;
-  std::vector<PrimitiveKey> triangle_keys;  // per slot; padding lanes hold kPadding
-  std::vector<StoredSphere> spheres;
-  std::vector<PrimitiveKey> sphere_keys;    // parallel to `spheres`
+  Array<TriangleBlock> triangle_blocks;
+  Array<PrimitiveKey> triangle_keys;  // per slot; padding lanes hold kPadding
+  Array<StoredSphere> spheres;
+  Array<PrimitiveKey> sphere_keys;    // parallel to `spheres`
 
   const TriangleBlock& block_of(std::uint32_t slot) const { return triangle_blocks[slot / kTriangleBlockLanes]; }
   glm::vec3 triangle_vertex(std::uint32_t slot, std::uint32_t vert) const {
