@@ -260,19 +260,21 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     reread_vectors(box_ray);
     const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
-    // All hit inner children go on the stack before the leaves are tested, the lowest slot (largest area)
-    // on top, so it is the next visited: fewer values live across the leaf tests (GCC spilled and reloaded
-    // seven of them at each node with a hit leaf), and no branch on whether there are any. Bound: below a
-    // node at depth d the stack holds at most 7 d entries (each ancestor's pushed children but the one popped),
-    // so with the eight pushed here at most 7 (kWideMaxDepth - 1) + 8 <= kWideStackSize.
-    size += push_children(node, mask & ~leaves, stack + size);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
         break;
       }
     }
-    if (found || size == 0) break;
+    if (found) break;
+    const unsigned inner = mask & ~leaves;
+    if (inner != 0) {
+      // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
+      index = node.child[__builtin_ctz(inner)];
+      size += push_children(node, inner & (inner - 1), stack + size);
+      continue;
+    }
+    if (size == 0) break;
     index = stack[--size];
   }
 
