@@ -33,7 +33,8 @@
 // P <= P^ (1 + 9u); 10u P^ covers gamma_8 P with room for the rounding of 10u P^ itself. For a quotient
 // n/d with |n^ - n| <= En, |d^ - d| <= Ed < |d^|:
 //     |n/d - n^/d^| <= (|n^| Ed + |d^| En) / ((|d^| - Ed) |d^|),
-// and computing n^ * fl(1/d^) instead of n^/d^ adds at most 3u |q| (one reciprocal shared by t, u and v);
+// and computing n^ * fl(1/d^) instead of n^/d^ adds at most 3u |q| (one reciprocal shared by u and v; t is
+// divided directly and its bound computed by a second division beside it, see t_ends);
 // with |d^| > 2 Ed, 1 / ((|d^| - Ed) |d^|) <= r^2 (1 + 2 Ed |r|) needs no second division; the whole bound
 // is scaled by 1 + 2^-40 for the few roundings of its own evaluation. No intermediate
 // can underflow or overflow: every non-zero difference of floats is at least 2^-149 and at most 2^129, so
@@ -83,6 +84,10 @@ using Vec4u = std::uint64_t __attribute__((vector_size(32)));
 inline constexpr double kUnit = 0x1p-53;
 // The bound constant for the sums of products above: 10u P^ (see the header comment).
 inline constexpr double kSumBound = 10.0 * kUnit;
+// The same scaled by 1 + 2^-40 (exact: 44 significant bits), for the bounds of den and a.n: a larger bound is
+// still a bound, and the 2^-40 carried in them covers the few roundings of t's bound (t_ends), which then
+// needs no product of its own on the candidate's dependency chain.
+inline constexpr double kCrossingBound = kSumBound * (1.0 + 0x1p-40);
 
 // Scalar helpers (the exact backend's filters, backends/exact/exact_filters.h, share them). Plain comparisons
 // rather than std::fmax, which is a library call unless the compiler may assume no NaN.
@@ -146,15 +151,14 @@ struct RefineRay {
 };
 
 // What the bounds of numerator and denominator give for every quotient n^ * r with r = fl(1/d^):
-// |n/d - n^ r| <= (|n^| Ed + |d^| En) w + 3u |n^ r|, scaled for its own rounding (see the header).
+// |n/d - n^ r| <= (|n^| Ed + |d^| En) w + 3u |n^ r|, scaled for its own rounding (see the header). u, v use
+// it (certify_barycentrics); t divides directly (t_ends). r and w are filled by quotient_of, for the winner
+// only; crossing_sums fills abs_den and den_err.
 struct Quotient {
   double r = 0.0;        // fl(1 / den)
   double w = 0.0;        // at least 1 / ((|den| - Ed) |den|) up to a few roundings: r^2 (1 + 2 Ed |r|)
   double abs_den = 0.0;
   double den_err = 0.0;
-  double error(double num, double num_err, double q) const {
-    return ((std::fabs(num) * den_err + abs_den * num_err) * w + 3.0 * kUnit * std::fabs(q)) * (1.0 + 0x1p-40);
-  }
 };
 
 // Everything t and u, v share: the triangle's edges, a = p0 - o, the normal's numerators den = d.n and
@@ -165,7 +169,7 @@ struct Crossing {
   Quotient quotient;
   double num = 0.0, num_err = 0.0;  // a.n and its bound
   double den = 0.0;  // d.n (its bound is quotient.den_err)
-  bool den_certain = false;  // whether `quotient` holds (crossing() returned true)
+  bool den_certain = false;  // whether den's sign is certain (crossing_sums returned true)
 };
 
 // e1 x e2 and its absolute terms: (|e1_j e2_k| + |e1_k e2_j|)_i.
@@ -175,8 +179,8 @@ TWINRAY_REFINE_INLINE void cross_with_terms(const Vec4& e1, const Vec4& e2, Vec4
   n_terms = abs(m1) + abs(m2);
 }
 
-// Fills `c` up to the quotient (crossing_quotient): false when den's sign is not certain (or Ed |r| > 1/2,
-// where the cheap w would not bound the exact one).
+// Fills `c` but for the quotient's r and w (quotient_of): false when den's sign is not certain (|den| <= 2 Ed:
+// then neither t_ends nor w would bound the exact values).
 TWINRAY_REFINE_INLINE bool crossing_sums(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
                                          Crossing& c) {
   c.p0 = p0;
@@ -188,29 +192,21 @@ TWINRAY_REFINE_INLINE bool crossing_sums(const RefineRay& ray, const Vec4& p0, c
   // (den, its absolute terms, a.n, its absolute terms)
   const Vec4 s = sums(ray.d * c.n, ray.abs_d * n_terms, c.a * c.n, abs(c.a) * n_terms);
   Quotient& q = c.quotient;
-  q.den_err = kSumBound * s.v[1];
+  q.den_err = kCrossingBound * s.v[1];
   q.abs_den = std::fabs(s.v[0]);
   c.num = s.v[2];
-  c.num_err = kSumBound * s.v[3];
+  c.num_err = kCrossingBound * s.v[3];
   c.den = s.v[0];
   c.den_certain = q.abs_den > 2.0 * q.den_err;
   return c.den_certain;
 }
-// The rest of `c` once den's sign is certain: r = fl(1 / den), and 1 / (1 - x) <= 1 + 2x for 0 <= x <= 1/2
-// gives w without a second division. Apart from crossing_sums so that a test that needs no quotient
-// (certainly_inside) decides before the division is issued: the division and the bound after it are the
-// longest stretch of a candidate's dependency chain.
-TWINRAY_REFINE_INLINE void crossing_quotient(Crossing& c) {
-  Quotient& q = c.quotient;
-  q.r = 1.0 / c.den;
+// The quotient's r and w once den's sign is certain (the barycentrics' bound): r = fl(1 / den), and
+// 1 / (1 - x) <= 1 + 2x for 0 <= x <= 1/2 gives w without a second division. Only the winner of a closest-hit
+// query needs them (refine_uv_kept); a candidate's t takes its own route (t_ends), and a membership test may
+// not even need that (certainly_inside).
+TWINRAY_REFINE_INLINE void quotient_of(double den, Quotient& q) {
+  q.r = 1.0 / den;
   q.w = q.r * q.r * (1.0 + 2.0 * q.den_err * std::fabs(q.r));
-}
-// Both: the whole crossing; false as crossing_sums.
-TWINRAY_REFINE_INLINE bool crossing(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
-                                    Crossing& c) {
-  if (!crossing_sums(ray, p0, p1, p2, c)) return false;
-  crossing_quotient(c);
-  return true;
 }
 
 // Whether the exact t = N / D of a crossing whose den's sign is certain lies strictly between tmin and
@@ -240,6 +236,15 @@ inline glm::vec3 unit_normal(double nx, double ny, double nz) {
   if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
   return glm::vec3(static_cast<float>(nx / len), static_cast<float>(ny / len), static_cast<float>(nz / len));
 }
+// The same bits from (x, y, z, 0): the three quotients as one vector division (each lane the same IEEE
+// division), so the winner's tail waits for one division after the square root instead of three in a row.
+TWINRAY_REFINE_INLINE glm::vec3 unit_normal(const Vec4& n) {
+  const double nx = n.v[0], ny = n.v[1], nz = n.v[2];
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0.0)) return glm::vec3(0.0f, 0.0f, 1.0f);
+  const Vec4d q = n.v / len;
+  return glm::vec3(static_cast<float>(q[0]), static_cast<float>(q[1]), static_cast<float>(q[2]));
+}
 
 // The floats that the ends of [x - err, x + err] round to, the ends widened past their own rounding: every
 // real in the interval rounds to a float between lo and hi, since rounding is monotonic. lo == hi certifies
@@ -250,15 +255,32 @@ struct Ends {
   float lo, hi;
   bool certified() const { return lo == hi && std::fabs(lo) >= 0x1p-125f && std::fabs(lo) <= 0x1.fffffep127f; }
 };
-TWINRAY_REFINE_INLINE Ends round_ends(double x, double err) {
-  const double slack = err + std::fabs(x) * 0x1p-52;  // covers the rounding of x - slack and x + slack
-  return {static_cast<float>(x - slack), static_cast<float>(x + slack)};
-}
 
-// The t interval of a crossing whose den is certain.
+// The t interval of a crossing whose den's sign is certain (crossing_sums returned true): the floats that the
+// ends of an interval around the exact N / D round to, widened past their own rounding (every real in it
+// rounds to a float between lo and hi, rounding being monotonic; lo == hi certifies t's rounding).
+// Two divisions issued side by side right after the sums, so that the chain from den to the ends is one
+// division, a product, two additions and the conversions; the reciprocal's route (x = N^ r, then w, the
+// bound, the slack) was about 15 cycles longer, all on the candidate's dependency chain, and only u, v need
+// r. With x = fl(N^ / D^), E = fl(fl(|N^| Ed) + fl(|D^| En)), P = fl(fl(|D^| - Ed) |D^|), A = fl(E / P):
+//   |N/D - N^/D^| <= (|N^| Ed + |D^| En) / ((|D^| - Ed) |D^|)  (the quotient bound of the header),
+//   |N^/D^ - x| <= u |x| / (1 - u),
+// and fl(x - slack) exceeds x - slack by at most u (|x| + slack) (x + slack likewise), so the ends enclose
+// N / D when slack (1 - u) >= (|N^| Ed + |D^| En) / ((|D^| - Ed) |D^|) + 2u |x| (1 + u). slack =
+// fl(A + fl(3u |x|)): 3u |x| after its own and the sum's rounding and the (1 - u) covers 2u |x| (1 + u), and
+// the factor 1 + 2^-40 that Ed and En carry beyond the 10u the header derives (kCrossingBound) covers A's
+// five roundings and the same two (at most 8u). |D^| - Ed > |D^| / 2 > 0 (den
+// certain, and |D^| >= 20u 2^-447 since Ed is at least 10u times a non-zero product), so P lies in
+// [2^-995, 2^782], E below 2^782 and A, x below 2^890: every intermediate is normal or zero and finite in
+// double, and flush-to-zero does not touch them. An end beyond float's range converts to an infinity, which
+// is never certified and compares as it should against tmin and tmax.
 TWINRAY_REFINE_INLINE Ends t_ends(const Crossing& c) {
-  const double q = c.num * c.quotient.r;
-  return round_ends(q, c.quotient.error(c.num, c.num_err, q));
+  const Quotient& q = c.quotient;
+  const double x = c.num / c.den;
+  const double e = std::fabs(c.num) * q.den_err + q.abs_den * c.num_err;
+  const double a = e / ((q.abs_den - q.den_err) * q.abs_den);
+  const double slack = a + std::fabs(x) * (3.0 * kUnit);
+  return {static_cast<float>(x - slack), static_cast<float>(x + slack)};
 }
 
 // q (within err of the exact value, per lane: u and v) clamped to [0, 1], if certain: 0 and 1 are floats, so
@@ -291,7 +313,8 @@ TWINRAY_REFINE_INLINE bool certify_barycentrics(const Vec2d& q, const Vec2d& err
 // u^2 (1 + 2u) (|a_j| |d_k| + |a_k| |d_j|) to component i of h x d, so 2^-100 |e|.(|a| x' |d|) bounds its
 // share of u_num's error (x' the cross product with both products added: the absolute terms), evaluated with
 // the other absolute terms as one sum (2^-100 / kSumBound is the factor that puts it on their scale).
-TWINRAY_REFINE_INLINE bool certify_barycentrics(const RefineRay& ray, const Crossing& c, float t, float& u, float& v) {
+TWINRAY_REFINE_INLINE bool certify_barycentrics(const RefineRay& ray, const Crossing& c, const Quotient& quotient,
+                                                 float t, float& u, float& v) {
   const Vec4 back = c.a - c.p0;  // TwoSum of p0_k and -o_k: a_k + error is exactly p0_k - o_k
   const Vec4 error = (c.p0 - (c.a - back)) + (-ray.o - back);
   const Vec4 h = (c.a - static_cast<double>(t) * ray.d) + error;
@@ -302,7 +325,6 @@ TWINRAY_REFINE_INLINE bool certify_barycentrics(const RefineRay& ray, const Cros
   const Vec4 terms = (abs(m1) + abs(m2)) + (0x1p-100 / kSumBound) * a_terms;
   // (e2.q, e1.q, and the absolute terms of their bounds)
   const Vec4 s = sums(c.e2 * q, c.e1 * q, abs(c.e2) * terms, abs(c.e1) * terms);
-  const Quotient& quotient = c.quotient;
   const Vec2d num = {s.v[0], -s.v[1]}, num_err = Vec2d{s.v[2], s.v[3]} * kSumBound;
   const Vec2d uv = num * quotient.r;
   const Vec2d bound = ((abs(num) * quotient.den_err + quotient.abs_den * num_err) * quotient.w +
@@ -341,7 +363,8 @@ TWINRAY_REFINE_INLINE bool refine_t_kept_v(const RefineRay& ray, const Vec4& p0,
                                            float tmin, float tmax, float& t_out, Crossing& c, const Exact& exact) {
   float t = 0.0f;
   bool certain = false;
-  if (crossing(ray, p0, p1, p2, c)) {
+  // The reciprocal and w that u, v need are left to refine_uv_kept (the winner only): t_ends needs neither.
+  if (crossing_sums(ray, p0, p1, p2, c)) {
     const Ends ends = t_ends(c);
     // Certainly outside: every t within the bound rounds below tmin or above tmax. (Most rejected
     // candidates end here: the triangle a secondary ray starts from, crossings beyond the closest hit.)
@@ -375,7 +398,6 @@ TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4
   Crossing c;
   if (crossing_sums(ray, p0, p1, p2, c)) {
     if (kDivisionFreeFirst && certainly_inside(c, tmin, tmax)) return true;
-    crossing_quotient(c);
     const Ends ends = t_ends(c);
     if (ends.hi < tmin || ends.lo > tmax) return false;
     // Strictly inside: the rounded t lies between the ends, so in [tmin, tmax]. Strict, because an end
@@ -394,8 +416,14 @@ TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4
 template <typename Exact>
 TWINRAY_REFINE_INLINE void refine_uv_kept(const RefineRay& ray, const Crossing& c, float t, float& u, float& v,
                                           glm::vec3* ng, const Exact& exact) {
-  if (ng != nullptr) *ng = unit_normal(c.n.v[0], c.n.v[1], c.n.v[2]);
-  if (c.den_certain && certify_barycentrics(ray, c, t, u, v)) return;
+  if (ng != nullptr) *ng = unit_normal(c.n);
+  if (c.den_certain) {
+    // The reciprocal and w here, for the winner only (the candidates' t needs neither, t_ends): the division
+    // starts with the query's tail and is ready before u, v's numerators are.
+    Quotient quotient = c.quotient;
+    quotient_of(c.den, quotient);
+    if (certify_barycentrics(ray, c, quotient, t, u, v)) return;
+  }
   float t_exact;
   exact(t_exact, u, v);
 }
@@ -404,7 +432,7 @@ template <typename Exact>
 TWINRAY_REFINE_INLINE void refine_uv_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2, float t,
                                        float& u, float& v, glm::vec3* ng, const Exact& exact) {
   Crossing c;
-  crossing(ray, p0, p1, p2, c);
+  crossing_sums(ray, p0, p1, p2, c);
   refine_uv_kept(ray, c, t, u, v, ng, exact);
 }
 
@@ -461,7 +489,7 @@ TWINRAY_REFINE_INLINE glm::vec3 geometric_normal(const Vec3& p0, const Vec3& p1,
   const Vec4 q0 = load(p0);
   Vec4 n, n_terms;
   cross_with_terms(load(p1) - q0, load(p2) - q0, n, n_terms);
-  return unit_normal(n.v[0], n.v[1], n.v[2]);
+  return unit_normal(n);
 }
 
 #undef TWINRAY_REFINE_INLINE
