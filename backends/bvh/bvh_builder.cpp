@@ -447,9 +447,7 @@ BvhTree build_bvh(std::span<const Bounds3> bounds, std::uint32_t second_kind_beg
     release_build_memory_tail(tree.nodes.data(), node_count * sizeof(BvhNode), tree.nodes.capacity() * sizeof(BvhNode));
   };
   const auto order = [&] {
-    tree.prim_order.reserve(refs.size());
-    advise_huge_pages(tree.prim_order.data(), refs.size() * sizeof(std::uint32_t));
-    tree.prim_order.resize(refs.size());
+    resize_on_huge_pages(tree.prim_order, refs.size());
     const auto copy_ids = [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) tree.prim_order[i] = refs[i].id;
     };

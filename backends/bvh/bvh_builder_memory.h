@@ -23,6 +23,15 @@ namespace twinray {
 // small pages.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
+// Resizes an empty std::vector (any allocator) to n elements with its memory advised as huge pages before
+// resize() first touches it: reserve, advise, resize.
+template <class Vector>
+void resize_on_huge_pages(Vector& v, std::size_t n) {
+  v.reserve(n);
+  advise_huge_pages(v.data(), n * sizeof(typename Vector::value_type));
+  v.resize(n);
+}
+
 // Raw memory for a build array: from 4 MiB on, its own 2 MiB-aligned mapping advised as huge pages (so no
 // unaligned edge stays on small pages), else the ordinary heap. Uninitialised, 64-byte aligned at least.
 void* allocate_build_memory(std::size_t bytes);

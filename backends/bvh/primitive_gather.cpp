@@ -13,9 +13,7 @@ namespace twinray {
 std::vector<Bounds3> primitive_bounds(const SceneGeometry& geometry) {
   std::vector<Bounds3> bounds;
   // Huge pages before the first touch (bvh_builder_memory.h): a few thousand page faults fewer per 1M triangles.
-  bounds.reserve(geometry.primitive_count());
-  advise_huge_pages(bounds.data(), geometry.primitive_count() * sizeof(Bounds3));
-  bounds.resize(geometry.primitive_count());
+  resize_on_huge_pages(bounds, geometry.primitive_count());
   std::size_t at = 0;
   for (const TriangleMesh& mesh : geometry.meshes) {
     // Large meshes in parallel blocks: a linear pass that would otherwise run alone before the build.
@@ -168,10 +166,7 @@ class BlockPacker {
       b.used += count;
       b.last_leaf = leaf;
       ends_[leaf] = static_cast<std::uint32_t>(first + count);
-      if (b.used == kTriangleBlockLanes) {  // full: no longer open
-        for (int m = o + 1; m < open_count_; ++m) open_[m - 1] = open_[m];
-        --open_count_;
-      }
+      if (b.used == kTriangleBlockLanes) remove_open(o);  // full: no longer open
       return true;
     }
     return false;
@@ -181,10 +176,15 @@ class BlockPacker {
     if (window_ == 0) return close(b);
     if (open_count_ == window_) {  // the oldest makes room
       close(open_[0]);
-      for (int m = 1; m < open_count_; ++m) open_[m - 1] = open_[m];
-      --open_count_;
+      remove_open(0);
     }
     open_[open_count_++] = b;
+  }
+
+  // Drops open block o, keeping the others oldest first.
+  void remove_open(int o) {
+    for (int m = o + 1; m < open_count_; ++m) open_[m - 1] = open_[m];
+    --open_count_;
   }
 
   void close(const Open& b) { ends_[b.last_leaf] = static_cast<std::uint32_t>((b.block + 1) * kTriangleBlockLanes); }

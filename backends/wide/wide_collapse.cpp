@@ -119,12 +119,8 @@ class Collapser {
     } else {
       const WideSize& root = measure(0);
       // Huge pages for the interior of both (bvh_builder_memory.h), before resize() first touches them.
-      tree.nodes.reserve(root.nodes);
-      tree.leaves.reserve(root.leaves);
-      advise_huge_pages(tree.nodes.data(), root.nodes * sizeof(WideNode));
-      advise_huge_pages(tree.leaves.data(), root.leaves * sizeof(WideLeafRange));
-      tree.nodes.resize(root.nodes);
-      tree.leaves.resize(root.leaves);
+      resize_on_huge_pages(tree.nodes, root.nodes);
+      resize_on_huge_pages(tree.leaves, root.leaves);
       tree.max_depth = root.height;
       emit(0, 0, 1, 0, root.own_leaves);
     }

@@ -155,10 +155,9 @@ SceneGeometry sliver_soup(std::size_t n, std::uint64_t seed) {
       const double s = 0.1 + 0.8 * rng.next_double();
       const glm::vec3 apex(p0 + s * edge + (glm::length(edge) / aspect) * lift);
       const glm::dvec3 area2 = glm::cross(edge, glm::dvec3(apex) - p0);
-      if (glm::dot(area2, area2) > 0.0 || draw == 63) {
-        if (glm::dot(area2, area2) > 0.0) mesh.positions[tri.z] = apex;
-        break;
-      }
+      const bool off_edge = glm::dot(area2, area2) > 0.0;
+      if (off_edge) mesh.positions[tri.z] = apex;
+      if (off_edge || draw == 63) break;
     }
   }
   return g;
