@@ -192,11 +192,10 @@ TEST(BvhVsBrute, DuplicatedGeometryResolvesTiesByLowestIds) {
   }
 }
 
-// Overlapping triangles in one plane z = 0.3 (not a dyadic number), one per leaf: every crossing is a tie
-// between triangles in different leaves, whose flat boxes the ray enters exactly at the tie's t. The box's
-// computed entry may exceed the correctly rounded t by an ulp or two; the traversal must still visit the box,
-// or the tie goes to whichever triangle it found first (issue 11, found by the arbiter on Sponza's floor).
-TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
+// Overlapping triangles in one plane z = 0.3 (not a dyadic number), put one per leaf by the options below:
+// every crossing is a tie between triangles in different leaves, whose flat boxes the ray enters (and
+// leaves) exactly at the tie's t.
+SceneGeometry overlapping_coplanar_tiles() {
   SceneGeometry g;
   TriangleMesh mesh;
   Rng rng(12, 0);
@@ -210,15 +209,36 @@ TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
   }
   mesh.positions.reserve(mesh.positions.size() + 1);
   g.meshes.push_back(mesh);
+  return g;
+}
+// Rays from above towards the tiles, most of them crossing several.
+Ray ray_towards_tiles(Rng& rays) {
+  Ray ray;
+  ray.org = {2.0f * rays.next_float() - 1.0f, 2.0f * rays.next_float() - 1.0f, 1.0f + rays.next_float()};
+  ray.dir = {0.7f * rays.next_float() - 0.35f, 0.7f * rays.next_float() - 0.35f, -0.5f - rays.next_float()};
+  return ray;
+}
+BvhBuildOptions bvh_one_per_leaf() {
+  BvhBuildOptions options;
+  options.max_leaf_size = 1;
+  return options;
+}
+WideBuildOptions wide_one_per_leaf() {
+  WideBuildOptions options;
+  options.binary.max_leaf_size = 1;
+  options.collapse.max_leaf_size = 1;
+  return options;
+}
+
+// The box's computed entry may exceed the correctly rounded t by an ulp or two; the traversal must still
+// visit the box, or the tie goes to whichever triangle it found first (issue 11, found by the arbiter on
+// Sponza's floor).
+TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
+  const SceneGeometry g = overlapping_coplanar_tiles();
   // One triangle per leaf in both trees, so the coplanar triangles sit in flat boxes of their own.
-  BvhBuildOptions one_per_leaf;
-  one_per_leaf.max_leaf_size = 1;
-  WideBuildOptions wide_one_per_leaf;
-  wide_one_per_leaf.binary.max_leaf_size = 1;
-  wide_one_per_leaf.collapse.max_leaf_size = 1;
   std::vector<std::unique_ptr<Backend>> trees;
-  trees.push_back(std::make_unique<BvhBackend>(one_per_leaf));
-  trees.push_back(std::make_unique<WideBackend>(wide_one_per_leaf));
+  trees.push_back(std::make_unique<BvhBackend>(bvh_one_per_leaf()));
+  trees.push_back(std::make_unique<WideBackend>(wide_one_per_leaf()));
   const std::unique_ptr<Backend> brute = make_brute_backend();
   brute->build(g);
   for (const std::unique_ptr<Backend>& tree : trees) {
@@ -226,9 +246,7 @@ TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
     Rng rays(13, 0);
     std::size_t hits = 0, differ = 0;
     for (int i = 0; i < 4000; ++i) {
-      Ray ray;
-      ray.org = {2.0f * rays.next_float() - 1.0f, 2.0f * rays.next_float() - 1.0f, 1.0f + rays.next_float()};
-      ray.dir = {0.7f * rays.next_float() - 0.35f, 0.7f * rays.next_float() - 0.35f, -0.5f - rays.next_float()};
+      const Ray ray = ray_towards_tiles(rays);
       Hit a, b;
       hits += brute->intersect(ray, a) ? 1 : 0;
       tree->intersect(ray, b);
@@ -236,6 +254,47 @@ TEST(BvhVsBrute, CoplanarTiesInDifferentLeaves) {
     }
     EXPECT_GT(hits, 2000u) << tree->name();
     EXPECT_EQ(differ, 0u) << tree->name();
+  }
+}
+
+// Both ends of the interval at a tie, on every instruction set: each ray's tmin and tmax are set to the t
+// brute force reports for it, so the hit lies exactly at both ends, in flat boxes that the ray enters and
+// leaves at that t. The box tests compare their near distance (a lower bound of the exact one) with tmax
+// and their far distance (an upper bound) with tmin, unwidened (backends/bvh/ray_box.h); with the near
+// reciprocal unscaled (kSlabNearScale = 1: the box test of c1d6bc7, before the 2^-21 widening) the
+// closest-hit rays lose ties and hits, and so they do with the far scale at 1.
+TEST(BvhVsBrute, FlatBoxesKeepBothEndsOfTheInterval) {
+  const SceneGeometry g = overlapping_coplanar_tiles();
+  const std::unique_ptr<Backend> brute = make_brute_backend();
+  brute->build(g);
+  std::vector<Ray> rays;
+  std::vector<Hit> expected;
+  Rng rng(14, 0);
+  for (int i = 0; i < 3000; ++i) {
+    Ray ray = ray_towards_tiles(rng);
+    Hit hit;
+    if (!brute->intersect(ray, hit)) continue;
+    ray.tmin = ray.tmax = hit.t;
+    rays.push_back(ray);
+    expected.push_back(hit);
+  }
+  ASSERT_GT(rays.size(), 1500u);
+  for (const Isa isa : runnable_isas()) {
+    BvhBackend bvh_tree(bvh_one_per_leaf(), isa);
+    WideBackend wide_tree(wide_one_per_leaf(), isa);
+    for (Backend* tree : {static_cast<Backend*>(&bvh_tree), static_cast<Backend*>(&wide_tree)}) {
+      SCOPED_TRACE(std::string(tree->name()) + "/" + std::string(to_string(isa)));
+      tree->build(g);
+      std::size_t differ = 0, not_occluded = 0;
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        Hit b;
+        const bool hit = tree->intersect(rays[i], b);
+        differ += (!hit || expected[i].prim_id != b.prim_id || !same_bits(expected[i].t, b.t)) ? 1 : 0;
+        not_occluded += tree->occluded(rays[i]) ? 0 : 1;
+      }
+      EXPECT_EQ(differ, 0u);
+      EXPECT_EQ(not_occluded, 0u);
+    }
   }
 }
 

@@ -5,7 +5,6 @@
 
 #include "backends/bvh/bvh_backend.h"
 
-#include "backends/bvh/cull_interval.h"
 #include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
 #include "core/intersect/sphere_robust.h"

@@ -96,20 +96,20 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  const float box_tmin = cull_min(ray.tmin);
-  float box_tmax = cull_max(tmax);  // follows tmax
+  // Boxes are tested against the ray's own [tmin, tmax], unwidened: ray_box.h's near and far distances are
+  // bounds of the exact ones, which is what a closed interval of correctly rounded t needs (its comment).
   // The root's box is tested only when an observer is told which nodes the query enters. Otherwise the
   // traversal starts inside the root: its children's boxes are tested anyway (a leaf root's primitives are
   // tested directly), so skipping it changes no answer, and saves a box test on every ray that hits the scene.
   bool more = std::is_same_v<Observer, NoVisitObserver> ||
-              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
-  TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);  // follows box_tmax
+              intersect_box(bvh.nodes[0], box_ray, ray.tmin, tmax, root_entry);
+  TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, ray.tmin, tmax);  // follows tmax
   while (more) {
     observer.enter(index, tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -123,7 +123,6 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
               const PrimitiveKey key = prims.triangle_keys[slot + lane];
               if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
               hit.t = tmax = t;
-              box_tmax = cull_max(tmax);
               hit.geom_id = key.geom_id;
               hit.prim_id = key.prim_id;
               best_is_sphere = false;
@@ -141,7 +140,6 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         const PrimitiveKey key = prims.sphere_keys[i];
         if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
         hit.t = tmax = t;
-        box_tmax = cull_max(tmax);
         hit.geom_id = key.geom_id;
         hit.prim_id = key.prim_id;
         best_is_sphere = true;
@@ -150,8 +148,8 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     }
     // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
     // the AVX broadcast could not be inlined there. One broadcast per leaf.
-    pair_ray.set_tmax(box_tmax);
-    more = pop_next(stack, size, box_tmax, index);
+    pair_ray.set_tmax(tmax);
+    more = pop_next(stack, size, tmax, index);
   }
 
   if (stats) {
@@ -187,17 +185,16 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
 
   float root_entry = 0.0f;
   std::uint32_t index = 0;
-  const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
-  // As in the closest-hit query: the root's box only when an observer is told about it.
+  // As in the closest-hit query: the ray's own interval, and the root's box only when an observer is told.
   bool more = std::is_same_v<Observer, NoVisitObserver> ||
-              intersect_box(bvh.nodes[0], box_ray, box_tmin, box_tmax, root_entry);
-  const TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, box_tmin, box_tmax);
+              intersect_box(bvh.nodes[0], box_ray, ray.tmin, ray.tmax, root_entry);
+  const TWINRAY_BOX_PAIR_RAY pair_ray(box_ray, ray.tmin, ray.tmax);
   while (more && !found) {
     observer.enter(index, ray.tmax);
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, box_tmax, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, ray.tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -217,7 +214,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
         found = intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, ray.tmax, t);
       }
     }
-    more = pop_next(stack, size, box_tmax, index);
+    more = pop_next(stack, size, ray.tmax, index);
   }
 
   if (stats) {

@@ -1,23 +1,47 @@
 #pragma once
 // Robust ray-box (slab) test for BVH traversal.
 //
-// Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013. The slab distances (plane - org) * inv_dir are each
-// computed with a relative error of at most gamma(3) (the subtraction, the product, and the reciprocal
-// computed once per ray), gamma(n) = n eps / (1 - n eps), eps = 2^-24. Scaling every far distance by
-// 1 + 2 gamma(3) therefore makes the test conservative: a box the exact ray touches is never culled, so
-// the watertight triangle test never loses a hit to the BVH.
+// Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013, with the error moved to where the traversal needs it:
+// the near distance is scaled *down* and the far distance up, so that each is a bound of the exact one and
+// the boxes can be tested against the ray's own interval [tmin, tmax], unwidened. Every tree (bvh, bvh8)
+// uses these two scales, so all of them cull alike.
 //
-// Zero direction components: inv_dir = 1/(+-0) = +-inf, so distances are +-inf and the slab is either
-// all or nothing, as it should be. The one NaN, 0 * inf, appears when the origin lies exactly on a slab
-// plane of an axis the ray is parallel to: the ray then runs inside the (closed) slab, so it must not
-// constrain the interval. _mm_max_ps(a, b) and _mm_min_ps(a, b) return b when either is NaN, so
+// What must not be culled. A primitive counts when its *correctly rounded* t lies in [tmin, tmax]
+// (core/geometry/ray.h, core/intersect/triangle_refine.h), and a closest-hit traversal keeps tmax at the
+// best t so far with the interval closed, so that a later primitive at the same rounded t still reaches the
+// tie rule (lowest geom_id, then prim_id). So a box must be entered whenever it holds a point of the ray
+// whose exact t rounds into [tmin, tmax], i.e. lies in [T0, T1] with T1 = tmax + ulp+(tmax) / 2 and
+// T0 = tmin - ulp-(tmin) / 2 (the midpoints to the floats beside them; ulp+ and ulp- the gaps above and
+// below). No float lies in (tmax, T1] or in [T0, tmin).
+//
+// The two bounds. With u = 2^-24 and every rounding a factor (1 + d_i), |d_i| <= u (no underflow or
+// overflow: a slab distance is 0 or of magnitude at least 2^-126, and the reciprocals are finite, as in
+// Ize's analysis and as before this change):
+//  - near = fl(fl(plane - org) * fl(fl(1 / dir) * kSlabNearScale)): four roundings and kSlabNearScale =
+//    1 - 4u exactly, so near = exact (1 - 4u) prod(1 + d_i) <= exact (1 - 4u)(1 + u)^4 =
+//    exact (1 - 10u^2 - ...) <= exact for exact >= 0; for exact < 0, near <= 0 (the sign is kept).
+//  - far = fl(fl(plane - org) * fl(fl(1 / dir) * kSlabFarScale)): kSlabFarScale = 1 + 6u exactly, so
+//    far >= exact (1 + 6u)(1 - u)^4 = exact (1 + 2u - 18u^2 + ...) >= exact for exact >= 0.
+// Take a box holding a point of the ray at exact t_p in [T0, T1], so exact near_i <= t_p <= exact far_j for
+// all axes i, j. Then: near_i <= max(exact near_i, 0) <= T1, and near_i is a float, so near_i <= tmax.
+// far_j >= exact far_j >= t_p >= T0 when tmin > 0 (T0 > 0), so far_j >= tmin, a float; when tmin = 0,
+// exact far_j >= t_p >= -2^-150, so exact far_j >= 0 (no underflow) and far_j >= 0 = tmin. And near_i <=
+// max(exact near_i, 0) <= exact far_j <= far_j. Hence max(near_i, tmin) <= min(far_j, tmax) over all axes:
+// the box is entered, against the ray's own [tmin, tmax]. Before the tenth round the near distance was
+// unscaled (three roundings, up to (1 + u)^3 above the exact one) and the interval was widened by 2^-21
+// instead (4 to 8 ulps at tmax); see the tenth round in docs/bvh-backend.md.
+//
+// Zero direction components: inv_dir = 1/(+-0) = +-inf (scaled, still +-inf), so distances are +-inf and
+// the slab is either all or nothing, as it should be. The one NaN, 0 * inf, appears when the origin lies
+// exactly on a slab plane of an axis the ray is parallel to: the ray then runs inside the (closed) slab, so
+// it must not constrain the interval. _mm_max_ps(a, b) and _mm_min_ps(a, b) return b when either is NaN, so
 // max(candidate, tmin) and min(candidate, tmax) drop a NaN candidate: the NaN slab is treated as containing
 // the whole ray. Conservative, never a culled hit. (Choosing the near plane by the sign of the direction,
 // rather than taking min/max of the two plane distances, matters here: with min/max, an origin on the far
 // plane would turn (-inf, NaN) into an empty interval.)
 //
 // The test runs on SSE2 lanes x, y, z; lane 3 reads the node's integer field and is neutralised by a NaN
-// in inv_dir's lane 3, which the same NaN rule turns into "no constraint".
+// in the reciprocals' lane 3, which the same NaN rule turns into "no constraint".
 //
 // The child-pair test exists twice: two SSE2 tests, and one AVX test of both boxes side by side; the
 // traversal kernels pick one per instruction set (bvh_kernels.h, backends/simd/isa.h).
@@ -34,14 +58,16 @@
 
 namespace twinray {
 
-// 1 + 2 gamma(3), rounded up, with eps = 2^-24.
-inline constexpr float kSlabFarScale = static_cast<float>(1.0 + 2.0 * (3.0 * 0x1p-24) / (1.0 - 3.0 * 0x1p-24)) *
-                                       (1.0f + 0x1p-23f);
+// The scales of the reciprocal for the near and the far planes (derivation above): 1 - 4u and 1 + 6u, both
+// exact in float. (1 + 6u is also 1 + 2 gamma(3) rounded up, Ize's far scale, the value it had before.)
+inline constexpr float kSlabNearScale = 1.0f - 0x1p-22f;
+inline constexpr float kSlabFarScale = 1.0f + 0x3p-23f;
+static_assert(kSlabNearScale == 1.0f - 4.0f * 0x1p-24f && kSlabFarScale == 1.0f + 6.0f * 0x1p-24f);
 
 struct BoxRay {
   __m128 org;          // (x, y, z, 0)
-  __m128 inv_dir;      // (1/x, 1/y, 1/z, NaN); 1/(+-0) = +-inf
-  __m128 inv_dir_far;  // inv_dir * kSlabFarScale, for the far planes (see below)
+  __m128 inv_dir_near;  // (1/x, 1/y, 1/z, NaN) * kSlabNearScale, for the near planes; 1/(+-0) = +-inf
+  __m128 inv_dir_far;   // the same * kSlabFarScale, for the far planes (see above and below)
   __m128 negative;     // all-ones lanes where the direction's sign bit is set (-0 included): near plane = hi
 
   BoxRay() = default;
@@ -52,18 +78,18 @@ struct BoxRay {
     const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     const __m128 nan_w = _mm_castsi128_ps(_mm_setr_epi32(0, 0, 0, 0x7fc00000));
     org = _mm_and_ps(_mm_loadu_ps(&ray.org.x), xyz);
-    inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), _mm_or_ps(_mm_and_ps(_mm_loadu_ps(&ray.dir.x), xyz), nan_w));
+    const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), _mm_or_ps(_mm_and_ps(_mm_loadu_ps(&ray.dir.x), xyz), nan_w));
+    inv_dir_near = _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabNearScale));
     inv_dir_far = _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale));
     negative = _mm_castsi128_ps(_mm_srai_epi32(_mm_castps_si128(inv_dir), 31));
   }
 };
 
-// The far distance is (plane - org) * (inv_dir * kSlabFarScale), the scaled reciprocal rounded once per ray,
-// rather than ((plane - org) * inv_dir) * kSlabFarScale: both are the exact distance times the scale times
-// four rounding factors (1 + d_i), |d_i| <= 2^-24 (the difference, the reciprocal, the product and the
-// product with the scale, in either order), which is all Ize's bound counts, so the scale covers the same
-// error (as in the wide kernels, backends/wide/wide_kernels_sse2.cpp); an infinite reciprocal stays
-// infinite. One product less per box.
+// Both distances are (plane - org) * (inv_dir * scale), the scaled reciprocal rounded once per ray, rather
+// than ((plane - org) * inv_dir) * scale: both are the exact distance times the scale times four rounding
+// factors (1 + d_i), |d_i| <= 2^-24 (the difference, the reciprocal, the product and the product with the
+// scale, in either order), which is all the bounds above count (as in the wide kernels,
+// backends/wide/wide_kernels_sse2.cpp); an infinite reciprocal stays infinite. No product per box.
 
 // True when the ray overlaps the node's box within [tmin, tmax] (closed); `entry` is where it enters.
 [[gnu::always_inline]] inline bool intersect_box(const BvhNode& node, const BoxRay& r, float tmin, float tmax, float& entry) {
@@ -72,7 +98,7 @@ struct BoxRay {
   const __m128 hi = _mm_load_ps(&node.hi.x);
   const __m128 near_plane = _mm_or_ps(_mm_and_ps(r.negative, hi), _mm_andnot_ps(r.negative, lo));
   const __m128 far_plane = _mm_or_ps(_mm_and_ps(r.negative, lo), _mm_andnot_ps(r.negative, hi));
-  const __m128 t_near = _mm_mul_ps(_mm_sub_ps(near_plane, r.org), r.inv_dir);
+  const __m128 t_near = _mm_mul_ps(_mm_sub_ps(near_plane, r.org), r.inv_dir_near);
   const __m128 t_far = _mm_mul_ps(_mm_sub_ps(far_plane, r.org), r.inv_dir_far);
   // Operand order matters: the NaN-free bound is the second operand (see above).
   __m128 t0 = _mm_max_ps(t_near, _mm_set1_ps(tmin));
@@ -112,10 +138,10 @@ struct BoxPairRayAvx2 {
   // The bits of intersect_box_pair_avx2's result: the sign bits of lane 0 of each half, as movemask gives
   // them (no instructions to move them to bits 0 and 1).
   static constexpr unsigned kFirstHit = 1u, kSecondHit = 16u;
-  __m256 org, inv_dir, inv_dir_far, negative, tmin, tmax;
+  __m256 org, inv_dir_near, inv_dir_far, negative, tmin, tmax;
   [[gnu::always_inline]] TWINRAY_TARGET_AVX2 BoxPairRayAvx2(const BoxRay& r, float t0, float t1)
       : org(_mm256_set_m128(r.org, r.org)),
-        inv_dir(_mm256_set_m128(r.inv_dir, r.inv_dir)),
+        inv_dir_near(_mm256_set_m128(r.inv_dir_near, r.inv_dir_near)),
         inv_dir_far(_mm256_set_m128(r.inv_dir_far, r.inv_dir_far)),
         negative(_mm256_set_m128(r.negative, r.negative)),
         tmin(_mm256_set1_ps(t0)),
@@ -133,7 +159,7 @@ struct BoxPairRayAvx2 {
   const __m256 hi = _mm256_set_m128(_mm_load_ps(&b.hi.x), _mm_load_ps(&a.hi.x));
   const __m256 near_plane = _mm256_blendv_ps(lo, hi, r.negative);
   const __m256 far_plane = _mm256_blendv_ps(hi, lo, r.negative);
-  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, r.org), r.inv_dir);
+  const __m256 t_near = _mm256_mul_ps(_mm256_sub_ps(near_plane, r.org), r.inv_dir_near);
   const __m256 t_far = _mm256_mul_ps(_mm256_sub_ps(far_plane, r.org), r.inv_dir_far);
   // Operand order matters: the NaN-free bound is the second operand (see above).
   __m256 t0 = _mm256_max_ps(t_near, r.tmin);

@@ -15,7 +15,7 @@
 // The ray as the slab test needs it, set up as in wide_kernels_sse2.cpp (one division for the three
 // reciprocals, the row offsets from the table of their sign bits).
 struct WideBoxRay {
-  WideSplat org[3], inv[3], inv_far[3];
+  WideSplat org[3], inv[3], inv_far[3];  // inv: the reciprocal * kSlabNearScale; inv_far: * kSlabFarScale
   // AVX-512 only (kWideSplatScalars): the origin again, for the far planes' subtractions, so that each of the
   // two reads its own {1to8} operand (GCC would broadcast one copy into a register at every node visit).
   WideSplat org_far[3];
@@ -25,7 +25,7 @@ struct WideBoxRay {
     const __m128 dir = _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f);
     const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), dir);
     alignas(16) float inv_s[4], inv_far_s[4];
-    _mm_store_ps(inv_s, inv_dir);
+    _mm_store_ps(inv_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabNearScale)));
     _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
       org[a] = make_splat(ray.org[a]);
@@ -43,8 +43,8 @@ struct WideBoxRay {
   }
 };
 
-// Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling and why the far
-// distances use the reciprocal pre-scaled by kSlabFarScale).
+// Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling, and ray_box.h
+// for why the near and far distances use the reciprocal pre-scaled by kSlabNearScale and kSlabFarScale).
 TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
                                           float* entry) {
   const float* rows = &node.lo[0][0];

@@ -4,7 +4,6 @@
 
 #include "backends/wide/wide_kernels.h"
 
-#include "backends/bvh/cull_interval.h"
 #include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
 #include "backends/wide/wide_octant_rows.h"

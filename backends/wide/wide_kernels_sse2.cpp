@@ -3,7 +3,6 @@
 
 #include "backends/wide/wide_kernels.h"
 
-#include "backends/bvh/cull_interval.h"
 #include "backends/bvh/ray_box.h"
 #include "backends/bvh/triangle_block.h"
 #include "backends/wide/wide_octant_rows.h"
@@ -28,14 +27,15 @@ namespace twinray::wide_sse2 {
 // quotient as a scalar division) and the row offsets from the table of the three sign bits
 // (wide_octant_rows.h): no branch on the direction's signs, which incoherent rays mispredict.
 struct WideBoxRay {
-  __m128 org[3], inv[3];
-  __m128 inv_far[3];  // inv scaled by kSlabFarScale, for the far planes (see below)
+  __m128 org[3];
+  __m128 inv[3];      // the reciprocal scaled by kSlabNearScale, for the near planes (ray_box.h)
+  __m128 inv_far[3];  // the reciprocal scaled by kSlabFarScale, for the far planes (see below)
   WideOctantRows rows;
 
   explicit WideBoxRay(const Ray& ray) {
     const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f));
     alignas(16) float inv_s[4], inv_far_s[4];
-    _mm_store_ps(inv_s, inv_dir);
+    _mm_store_ps(inv_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabNearScale)));
     _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
       org[a] = _mm_set1_ps(ray.org[a]);
@@ -53,11 +53,11 @@ struct WideBoxRay {
 // far values of each axis are folded into [tmin, tmax] one axis at a time with the NaN-free bound as the
 // second operand of max / min, so a 0 * inf NaN drops out exactly as in the binary test.
 //
-// The far distance is (plane - org) * (inv * kSlabFarScale) with the scaled reciprocal rounded once per ray,
-// not ((plane - org) * inv) * kSlabFarScale as in ray_box.h: both are the exact distance times the scale
-// times four rounding factors (1 + d_i), |d_i| <= 2^-24 (the difference, the reciprocal, the product and
-// the product with the scale, in either order), which is all Ize's bound counts, so the scale covers the
-// same error; an infinite reciprocal stays infinite. One product less per axis and node visit.
+// Both distances are (plane - org) * (1/dir * scale) with the scaled reciprocal rounded once per ray (as in
+// ray_box.h): the exact distance times the scale times four rounding factors (1 + d_i), |d_i| <= 2^-24 (the
+// difference, the reciprocal, the product with the scale and the product), which is what ray_box.h's
+// bounds count: the near distance is at most the exact one, the far distance at least, so the boxes are
+// tested against the ray's own [tmin, tmax]. An infinite reciprocal stays infinite.
 inline unsigned test_four(const float* rows, const WideBoxRay& r, std::size_t col, __m128 tmin, __m128 tmax,
                           float* entry) {
   __m128 t0 = tmin, t1 = tmax;

@@ -11,9 +11,9 @@
 // one), then the inner children are visited in stored order, larger area first (SATO, see
 // wide_collapse.h), with no sorting at all.
 //
-// Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes against
-// the same widened interval (cull_interval.h), so coplanar ties and hits at the ends of the interval are
-// decided exactly as by brute force.
+// Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes by the
+// same bounds of the near and far distances (ray_box.h's scales) against the ray's own interval, so coplanar
+// ties and hits at the ends of the interval are decided exactly as by brute force.
 //
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
 // headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes(),
@@ -124,15 +124,15 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   [[maybe_unused]] bool best_crossing_kept = false;
   alignas(32) float entry[kWideWidth];
 
-  // Boxes are tested against the widened interval of cull_interval.h, primitives against the ray's own.
-  const float box_tmin = cull_min(ray.tmin);
+  // Boxes and primitives are tested against the ray's own interval: the slab distances are bounds of the
+  // exact ones (ray_box.h), so a box holding a hit whose rounded t is tmin or tmax is not culled.
   std::uint32_t ref = 0;  // the root node
   for (;;) {
     if (!WideRef::is_leaf(ref)) {
       const WideNode& node = node_at(bvh.nodes, ref);
       if constexpr (kStats) boxes_tested += filled_slots(node);
       reread_vectors(box_ray);  // as in occluded_impl: no copies live across the leaf tests
-      const unsigned mask = test_boxes(node, box_ray, box_tmin, cull_max(tmax), entry);
+      const unsigned mask = test_boxes(node, box_ray, ray.tmin, tmax, entry);
       if (mask != 0) {
         if ((mask & (mask - 1)) == 0) ref = node.child[__builtin_ctz(mask)];
         else ref = order_children(node, mask, entry, stack, size);
@@ -183,7 +183,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
         }
       }
     }
-    if (!pop_next(stack, size, cull_max(tmax), ref)) break;
+    if (!pop_next(stack, size, tmax, ref)) break;
   }
 
   if constexpr (kStats) {
@@ -246,9 +246,8 @@ template <bool kTriangles, bool kSpheres, bool kStats>
   bool found = false;
   alignas(32) float entry[kWideWidth];
 
-  // The widened box interval of cull_interval.h: a leaf whose only hit lies at the rounded tmin or tmax
-  // must not be culled by the box test's own rounding.
-  const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
+  // The ray's own interval: a leaf whose only hit lies at the rounded tmin or tmax is not culled by the box
+  // test's own rounding, whose near and far distances are bounds of the exact ones (ray_box.h).
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = node_at(bvh.nodes, index);
@@ -258,7 +257,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     // which clobbers every vector register, and GCC spills and reloads all of them at each node with a
     // hit leaf (docs/bvh-backend.md, "Any-hit, sixth round").
     reread_vectors(box_ray);
-    const unsigned mask = test_boxes(node, box_ray, box_tmin, box_tmax, entry);
+    const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
