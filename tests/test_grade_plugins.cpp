@@ -503,6 +503,20 @@ TEST(GradePlugins, BruteForcePassesTheEighthRoundsChecks) {
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }
 
+// A second instance that is wrong on its own scene, not because of the first (scotty bug 82 drops one triangle of
+// each of the grid's squares whoever builds it): asked of one instance built on that scene alone, the ray gets
+// the same wrong answer, so the verdict says the plugin is wrong on that scene and the reproduce line traces it
+// there, rather than blaming the instances' independence.
+TEST(GradePlugins, SecondInstanceWrongOnItsOwnSceneIsTracedThere) {
+  const Scorecard card = grade(scotty_plugin("morton-map-dedup"), {"two-instances"});
+  const CheckResult& c = check_named(card, "two-instances");
+  EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
+  EXPECT_NE(c.detail.find("alone answers the same: the plugin is wrong on that scene itself"), std::string::npos)
+      << c.detail;
+  EXPECT_NE(c.reproduce.find(" trace procedural:grid:"), std::string::npos) << c.reproduce;
+  EXPECT_TRUE(c.figures.value("replays_alone", false)) << terminal_check_line(c);
+}
+
 // The checks made for the tenth round's bugs fail no correct BVH: the brute-force plugin passes the sphere
 // segments that start and end inside a ball and the ties among 24 copies of each flat triangle of a box.
 TEST(GradePlugins, BruteForcePassesTheTenthRoundsChecks) {
