@@ -163,7 +163,28 @@ INSTANTIATE_TEST_SUITE_P(
                       // it (the two-instances check's worker holds two).
                       BugCase{"global-tree", "two-instances", Outcome::Fail,
                               "with a second instance of the plugin built on scene 'grid' in the same process",
-                              "closest-soup"}),
+                              "closest-soup"},
+                      // The tenth round's (docs/grading.md, "The tenth round"). Caught by checks that existed:
+                      BugCase{"morton-map-dedup", "closest-coincident", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"quantised-nearest", "spheres-sizes", Outcome::Fail, "answers wrong", "closest-soup"},
+                      BugCase{"leaf-clip-exit", "closest-cornell", Outcome::Fail, "plugin reports a miss",
+                              "closest-soup"},
+                      BugCase{"centre-order-prune", "closest-soup", Outcome::Fail, "answers wrong", "any-hit-cornell"},
+                      BugCase{"prim-id-global", "closest-mixed", Outcome::Fail, "which the scene does not have",
+                              "closest-soup"},
+                      BugCase{"uv-leaf-winding", "closest-soup", Outcome::Fail, "wrong attributes: u",
+                              "any-hit-cornell"},
+                      BugCase{"shadow-cache-no-tmax", "ray-interval-cornell", Outcome::Fail, "plugin says occluded",
+                              "closest-soup"},
+                      BugCase{"fma-edges", "watertight-ball", Outcome::Fail, "", "closest-soup"},
+                      BugCase{"parallel-strict", "axis-aligned-box", Outcome::Fail, "answers wrong", "closest-soup"},
+                      // Caught by what the round added: segments inside a sphere's ball (a solid-ball any-hit
+                      // says occluded), and exact ties among copies of flat triangles kept in several leaves
+                      // entered at the hit's t (pruning without slack skips the lower prim_id).
+                      BugCase{"anyhit-solid-sphere", "spheres-sizes", Outcome::Fail, "plugin says occluded",
+                              "closest-soup"},
+                      BugCase{"prune-no-slack", "ties-duplicates-box", Outcome::Fail, "answers wrong",
+                              "ties-duplicates"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -479,6 +500,28 @@ TEST(GradePlugins, BruteForcePassesTheEighthRoundsChecks) {
   const Scorecard card =
       grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "closest-soup-large", "ties-duplicates-reversed"});
   ASSERT_EQ(card.checks.size(), 3u);
+  for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
+}
+
+// A second instance that is wrong on its own scene, not because of the first (scotty bug 82 drops one triangle of
+// each of the grid's squares whoever builds it): asked of one instance built on that scene alone, the ray gets
+// the same wrong answer, so the verdict says the plugin is wrong on that scene and the reproduce line traces it
+// there, rather than blaming the instances' independence.
+TEST(GradePlugins, SecondInstanceWrongOnItsOwnSceneIsTracedThere) {
+  const Scorecard card = grade(scotty_plugin("morton-map-dedup"), {"two-instances"});
+  const CheckResult& c = check_named(card, "two-instances");
+  EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
+  EXPECT_NE(c.detail.find("alone answers the same: the plugin is wrong on that scene itself"), std::string::npos)
+      << c.detail;
+  EXPECT_NE(c.reproduce.find(" trace procedural:grid:"), std::string::npos) << c.reproduce;
+  EXPECT_TRUE(c.figures.value("replays_alone", false)) << terminal_check_line(c);
+}
+
+// The checks made for the tenth round's bugs fail no correct BVH: the brute-force plugin passes the sphere
+// segments that start and end inside a ball and the ties among 24 copies of each flat triangle of a box.
+TEST(GradePlugins, BruteForcePassesTheTenthRoundsChecks) {
+  const Scorecard card = grade(TWINRAY_TEST_BRUTE_PLUGIN, {"spheres-sizes", "ties-duplicates-box"});
+  ASSERT_EQ(card.checks.size(), 2u);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
 }
 

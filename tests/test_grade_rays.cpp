@@ -94,6 +94,17 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
     EXPECT_LT(near.t, r.tmin);  // the near root (at least) is before tmin
   }
   EXPECT_GE(inside_interval, 600u / 8);
+  // The segments inside a ball (finite tmax) cross no surface: a miss, and not occluded (in this scene no other
+  // sphere reaches into a ball). A test that treats the sphere as solid answers them wrong.
+  std::size_t segments = 0;
+  for (const Ray& r : rays) {
+    if (std::isinf(r.tmax)) continue;
+    ++segments;
+    Hit h;
+    EXPECT_FALSE(brute->intersect(r, h));
+    EXPECT_FALSE(brute->occluded(r));
+  }
+  EXPECT_EQ(segments, 600u / 8);
 }
 
 // Rays whose interval ends exactly at a crossing (interval_ends.h): on the Cornell box's walls and the integer

@@ -35,6 +35,17 @@ TEST(NamedScene, ProceduralScenesHaveTheDocumentedSizes) {
   EXPECT_EQ(rev.geometry.meshes[0].indices, dup.geometry.meshes[0].indices);
   for (std::size_t k = 0; k < 20; ++k)
     EXPECT_EQ(rev.geometry.meshes[1].indices[19 - k], rev.geometry.meshes[0].indices[k]) << k;
+  // The box's triangles listed 24 times each in one mesh, shuffled: every triangle of procedural:box is there 24
+  // times, and the order is not the box's (the copy with the lowest prim_id is not always the first listed).
+  const Scene box = load_named_scene("procedural:box:-1:1");
+  const Scene dbox = load_named_scene("procedural:duplicates-box:-1:1:24:1");
+  ASSERT_EQ(dbox.geometry.meshes.size(), 1u);
+  ASSERT_EQ(dbox.geometry.meshes[0].indices.size(), 24u * box.geometry.meshes[0].indices.size());
+  for (const glm::uvec3& t : box.geometry.meshes[0].indices)
+    EXPECT_EQ(std::count(dbox.geometry.meshes[0].indices.begin(), dbox.geometry.meshes[0].indices.end(), t), 24);
+  EXPECT_NE(dbox.geometry.meshes[0].indices[1], dbox.geometry.meshes[0].indices[0]);
+  EXPECT_EQ(load_named_scene("procedural:duplicates-box:-1:1:24:1").geometry.meshes[0].indices,
+            dbox.geometry.meshes[0].indices);
   // Every scene has a shape per geometry id and a material, like a loaded scene.
   EXPECT_EQ(dup.shapes.size(), 2u);
   EXPECT_FALSE(dup.materials.empty());

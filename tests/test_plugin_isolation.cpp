@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -323,6 +324,9 @@ const QueryFailureCase kQueryFailures[] = {
     {"socket", TWINRAY_TEST_HOSTILE_SOCKET_PLUGIN, PluginFailureKind::Crash, "sandbox", "SIGSYS", "socket"},
     {"fork", TWINRAY_TEST_HOSTILE_FORK_PLUGIN, PluginFailureKind::Crash, "sandbox", "SIGSYS", "clone"},
     {"exec", TWINRAY_TEST_HOSTILE_EXEC_PLUGIN, PluginFailureKind::Crash, "sandbox", "SIGSYS", "execve"},
+    // raise(SIGSTOP): a stopped worker is not a dead one; the per-call limit cuts it (SIGKILL ends a stopped
+    // process) and it is a timeout, not a wait.
+    {"stop", TWINRAY_TEST_HOSTILE_STOP_PLUGIN, PluginFailureKind::Timeout, "timeout", "", ""},
 };
 
 INSTANTIATE_TEST_SUITE_P(PluginIsolation, QueryFailure, ::testing::ValuesIn(kQueryFailures),
@@ -551,6 +555,63 @@ TEST(PluginIsolation, OverwrittenSharedMemoryIsACrashNotAWait) {
   EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
   EXPECT_EQ(f->cause, "corrupted") << f->what();
   EXPECT_TRUE(contains(f->what(), "an answer the worker cannot give")) << f->what();
+}
+
+// exit(0) is a clean status, but not a clean end: called in build it is a crash of the build, with its code.
+TEST(PluginIsolation, ExitZeroInBuildIsACrash) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_EXIT0_BUILD_PLUGIN, quick_limits());
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->build(isolation_scene()); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->cause, "exit") << f->what();
+  EXPECT_EQ(f->exit_code, 0) << f->what();
+  EXPECT_EQ(f->stage, "build") << f->what();
+}
+
+// exit(0) from a thread of the plugin, 50 ms after build, while twinray's calls come and go: whether a call
+// was in flight or not, it is reported (by the call, or by shutdown) as a crash with exit code 0.
+TEST(PluginIsolation, ExitZeroFromAPluginThreadIsACrash) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_THREAD_EXIT0_PLUGIN, quick_limits());
+  plugin->build(isolation_scene());
+  const std::vector<Ray> rays = isolation_rays(256, 7);
+  std::vector<Hit> hits(rays.size());
+  std::optional<PluginFailure> f;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (!f && std::chrono::steady_clock::now() < give_up) {
+    f = failure_of([&] { plugin->intersect(rays, hits); });
+    if (!f) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  if (!f) f = failure_of([&] { plugin->shutdown(); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->cause, "exit") << f->what();
+  EXPECT_EQ(f->exit_code, 0) << f->what();
+}
+
+// A plugin that prints a line on every query (debug output left in) is answered as any other: its output goes
+// into a pipe twinray drains, so 2 x 20,000 lines neither block the worker nor fail the calls.
+TEST(PluginIsolation, PrintingOnEveryQueryIsNoFailure) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_CHATTY_PLUGIN, quick_limits());
+  plugin->build(isolation_scene());
+  const std::vector<Ray> rays = isolation_rays(20000, 9);
+  std::vector<Hit> hits(rays.size());
+  std::vector<std::uint8_t> occluded(rays.size(), 1);
+  EXPECT_NO_THROW(plugin->intersect(rays, hits));
+  EXPECT_NO_THROW(plugin->occluded(rays, occluded));
+  for (const Hit& h : hits) EXPECT_FALSE(h.found());
+  EXPECT_EQ(std::count(occluded.begin(), occluded.end(), 0), static_cast<std::ptrdiff_t>(rays.size()));
+  EXPECT_NO_THROW(plugin->shutdown());
+}
+
+// dup2() of the shared memory's descriptor onto stdout (allowed: only 3 and 4 as targets are refused) turns
+// the plugin's printing into writes over the memory the worker answers through: a corrupted answer, a crash
+// at once, not a wait.
+TEST(PluginIsolation, StdoutOntoTheSharedMemoryIsACrashNotAWait) {
+  const auto plugin = make_isolated_plugin_backend(TWINRAY_TEST_HOSTILE_STDOUT_TO_SHM_PLUGIN, quick_limits());
+  const std::optional<PluginFailure> f = failure_of([&] { plugin->build(isolation_scene()); });
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->kind, PluginFailureKind::Crash) << f->what();
+  EXPECT_EQ(f->cause, "corrupted") << f->what();
 }
 
 // ---- limits, shutdown, resources -----------------------------------------------------------------------------

@@ -181,11 +181,27 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
     // Only the second instance answered wrong: the first was right after the second's build.
     const WrongAnswer& first = second_j->wrong.front();
     v.detail = fmt::format("the first instance's {} answers right, but {} of {} answers of a second instance built on "
-                           "scene '{}' in the same process wrong; first, ray {}: {} (instances must be independent: "
-                           "the second must answer for its own scene)",
+                           "scene '{}' in the same process wrong; first, ray {}: {}",
                            answers, second_wrong, second_set.rays.size(), ctx.spec.second_scene, first.ray,
                            second_j->first_wrong_description);
     v.reproduce = ctx.grade_command();
+    // Asked of one fresh instance built on the second scene alone (what `twinray trace` does): the same wrong
+    // answer means the plugin is wrong on that scene itself, and the trace reproduces it; another answer means
+    // the second instance answered under the first one's influence.
+    const CheckContext second{ctx.spec, *ctx.second_scene, ctx.env, ctx.deadline, nullptr};
+    const Ray& ray = second_set.rays[first.ray];
+    const std::optional<CheckContext::AloneAnswer> alone = second.answer_alone(ray);
+    const bool same = alone && (first.any_hit ? alone->occluded == (second_mine.occluded[first.ray] != 0)
+                                              : same_bits(alone->hit, second_mine.hits[first.ray]));
+    if (alone) v.figures["replays_alone"] = same;
+    if (same) {
+      v.detail += fmt::format(" (one instance built on scene '{}' alone answers the same: the plugin is wrong on that "
+                              "scene itself)",
+                              ctx.spec.second_scene);
+      v.reproduce = second.trace_command(ray);
+    } else {
+      v.detail += " (instances must be independent: the second must answer for its own scene)";
+    }
   } else if (j.wrong_total() == 0) {
     const IntervalEndRay& e = set.ends[*ends.first];
     v.detail = fmt::format("{} of {} answers at the exact ends of intervals wrong (closed: tmin <= t <= tmax); first, "

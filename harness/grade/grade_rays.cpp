@@ -183,6 +183,17 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
       default: rays.push_back(make(from, s.center + 1.5f * s.radius * across - from)); break; // a clear miss
     }
   }
+  // Then count / 8 segments inside the balls, from a separate stream so the rays above stay as they were: from
+  // within 0.5 r of the centre, a unit direction, tmax 0.4 r, so the segment ends at least 0.1 r inside the
+  // surface and crosses no surface of its sphere. Only a test that treats the sphere as a solid ball (any-hit:
+  // "the segment overlaps the ball") or reports a root beyond tmax answers a hit on it.
+  Rng inner = Rng::keyed(seed, 0x5bee, 6);
+  const std::size_t segments = count / 8;
+  for (std::size_t i = 0; i < segments; ++i) {
+    const Sphere& s = spheres[i % spheres.size()];
+    const glm::vec3 org = s.center + 0.5f * s.radius * inner.next_float() * sample_uniform_sphere(next2(inner));
+    rays.push_back(make(org, sample_uniform_sphere(next2(inner)), 0.0f, 0.4f * s.radius));
+  }
   return rays;
 }
 

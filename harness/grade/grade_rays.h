@@ -48,7 +48,8 @@ std::vector<Ray> watertight_rays(const Scene& scene, std::size_t count, std::uin
 
 // Rays at the scene's spheres: from outside at the disc (from 2 to 10 radii away, and from 2,000 to 20,000,
 // where the textbook quadratic b^2 - 4ac in float loses r^2 to cancellation), from inside, near-tangent
-// (offset 0.99 r and 1.01 r), tangent and clear misses.
+// (offset 0.99 r and 1.01 r), tangent and clear misses; then count / 8 segments that start and end inside a
+// ball (tmax 0.4 r from within 0.5 r of its centre), which hit nothing of their sphere.
 std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_t seed);
 
 // Rays at random interior points of random triangles (barycentrics at least 0.1 from every edge), from

@@ -12,9 +12,11 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <utility>
 
 namespace twinray {
 
@@ -138,6 +140,31 @@ SceneGeometry box_mesh(int lo, int hi) {
   return g;
 }
 
+// The closed box [lo, hi]^3 of box_mesh with every triangle listed `copies` times in its one mesh, the copies
+// in a seeded random order (Fisher-Yates on splitmix64, the same on every platform). Each triangle is a cluster
+// of identical, flat, axis-aligned boxes that no split separates: a builder whose leaves hold fewer than
+// `copies` primitives keeps the cluster in several leaves whose boxes are entered at exactly the same t, and the
+// tie rule names the copy with the lowest prim_id, in whichever leaf it is. A traversal that prunes a node whose
+// entry (computed in double) lies beyond the hit's t rounded to float skips the later leaves half the time.
+SceneGeometry duplicated_box(int lo, int hi, int copies, std::uint64_t seed) {
+  SceneGeometry g = box_mesh(lo, hi);
+  TriangleMesh& m = g.meshes[0];
+  std::vector<glm::uvec3> listed;
+  listed.reserve(m.indices.size() * static_cast<std::size_t>(copies));
+  for (const glm::uvec3& t : m.indices)
+    for (int c = 0; c < copies; ++c) listed.push_back(t);
+  std::uint64_t state = seed;
+  const auto next = [&state] {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  };
+  for (std::size_t i = listed.size(); i > 1; --i) std::swap(listed[i - 1], listed[next() % i]);
+  m.indices = std::move(listed);
+  return g;
+}
+
 struct Generator {
   ProceduralKind kind;
   std::function<SceneGeometry(const ProceduralArgs&)> make;
@@ -205,6 +232,16 @@ const std::vector<Generator>& generators() {
            r = a.real(4, "RADIUS", true);
          }
          return tessellated_sphere(c, r, s);
+       }},
+      {{"duplicates-box", "LO:HI:COPIES:SEED",
+        "the box [LO, HI]^3 with every triangle listed COPIES times in one mesh, in a seeded random order (exact "
+        "ties among flat, axis-aligned triangles)"},
+       [](const ProceduralArgs& a) {
+         a.expect_count(4, 4, "LO:HI:COPIES:SEED");
+         const long long lo = a.integer(0, -64, 63, "LO"), hi = a.integer(1, lo + 1, 64, "HI");
+         return duplicated_box(static_cast<int>(lo), static_cast<int>(hi),
+                               static_cast<int>(a.integer(2, 1, 64, "COPIES")),
+                               static_cast<std::uint64_t>(a.integer(3, 0, std::numeric_limits<long long>::max(), "SEED")));
        }},
       {{"box", "LO:HI", "the closed, axis-aligned box [LO, HI]^3, each face split into unit squares"},
        [](const ProceduralArgs& a) {

@@ -34,6 +34,14 @@
  *                 dies between two calls, with no call of twinray's waiting for it
  *   SPIN          starts two detached threads in build that spin forever (a busy-waiting thread pool that is
  *                 never stopped): it answers everything, slowly on a busy machine, and ends with its worker
+ *   EXIT0_BUILD   calls exit(0) in build (a command-line tool's "done" left in library code): a clean status
+ *                 that must still be a crash, not a normal end
+ *   THREAD_EXIT0  starts a detached thread in build that calls exit(0) 50 ms later, while queries run
+ *   STOP          raises SIGSTOP on itself on a trigger ray (a debugging aid left in): the worker is stopped,
+ *                 not dead, and must be cut by the ray's time limit
+ *   CHATTY        prints a line on every query (debug output left in), and answers like the others
+ *   STDOUT_TO_SHM dup2()s the worker's shared memory (descriptor 3) onto stdout in build and prints: the text
+ *                 lands in the memory the worker answers through
  *
  * Strict C89 like the other test plugins, plus the POSIX calls it needs.
  */
@@ -43,6 +51,7 @@
 
 #include <errno.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -139,6 +148,17 @@ static void* spin_forever(void* arg) {
   return NULL;
 }
 #endif
+#ifdef TWINRAY_HOSTILE_THREAD_EXIT0
+static void* exit_later(void* arg) {
+  struct timespec pause;
+  (void)arg;
+  pause.tv_sec = 0;
+  pause.tv_nsec = 50000000L;
+  nanosleep(&pause, NULL);
+  exit(0);
+  return NULL;
+}
+#endif
 #ifdef TWINRAY_HOSTILE_LATE_THREAD_CRASH
 static void* crash_later(void* arg) {
   struct timespec pause;
@@ -158,6 +178,26 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   (void)capacity;
 #ifdef TWINRAY_HOSTILE_BUILD_CRASH
   crash();
+#endif
+#ifdef TWINRAY_HOSTILE_EXIT0_BUILD
+  exit(0);
+#endif
+#ifdef TWINRAY_HOSTILE_THREAD_EXIT0
+  {
+    pthread_t thread;
+    if (pthread_create(&thread, NULL, exit_later, NULL) != 0) {
+      write_message(error, capacity, "pthread_create failed");
+      return TWINRAY_ERROR;
+    }
+    pthread_detach(thread);
+  }
+#endif
+#ifdef TWINRAY_HOSTILE_STDOUT_TO_SHM
+  if (dup2(3, 1) == 1) {
+    int line;
+    for (line = 0; line < 64; ++line) printf("line %02d of a plugin whose stdout is the worker's shared memory\n", line);
+    fflush(stdout);
+  }
 #endif
 #ifdef TWINRAY_HOSTILE_EXIT_HANDLER_CRASH
   atexit(crash_at_exit);
@@ -332,6 +372,9 @@ static int misbehave(twinray_hit* hit) {
 #ifdef TWINRAY_HOSTILE_EXEC
   execl("/bin/true", "true", (char*)NULL);
 #endif
+#ifdef TWINRAY_HOSTILE_STOP
+  raise(SIGSTOP);
+#endif
 #ifdef TWINRAY_HOSTILE_BAD_HIT
   hit->t = 1.0f;
   hit->u = hit->v = 0.0f;
@@ -348,6 +391,9 @@ static int misbehave(twinray_hit* hit) {
 static int hostile_intersect1(const void* self, const twinray_ray* ray, twinray_hit* hit, twinray_query_stats* stats) {
   (void)self;
   (void)stats;
+#ifdef TWINRAY_HOSTILE_CHATTY
+  printf("intersect1: ray from %g %g %g\n", (double)ray->org[0], (double)ray->org[1], (double)ray->org[2]);
+#endif
   if (is_trigger(ray)) return misbehave(hit);
   return 0;
 }
@@ -356,6 +402,9 @@ static int hostile_occluded1(const void* self, const twinray_ray* ray, twinray_q
   twinray_hit ignored;
   (void)self;
   (void)stats;
+#ifdef TWINRAY_HOSTILE_CHATTY
+  fprintf(stderr, "occluded1: ray from %g %g %g\n", (double)ray->org[0], (double)ray->org[1], (double)ray->org[2]);
+#endif
   if (is_trigger(ray)) return misbehave(&ignored);
   return 0;
 }
