@@ -95,6 +95,13 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 
 namespace wide_detail {
 
+// The triangle test's ray: the sheared frame, and the ray in double by this instruction set's set_refine_ray.
+TWINRAY_KERNEL inline TriangleRay make_wide_triangle_ray(const Ray& ray) {
+  TriangleRay r = make_triangle_ray_frame(ray.org, ray.dir);
+  set_refine_ray(r.refine, ray);
+  return r;
+}
+
 // Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
 // there at their next uses instead of keeping copies in registers.
 TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
@@ -110,7 +117,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
                                                                  QueryStats* stats) {
   hit = Hit{};
   WideBoxRay box_ray(ray);
-  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  [[maybe_unused]] const TriangleRay tri_ray = make_wide_triangle_ray(ray);
   const PrimitiveStore& prims = *bvh.prims;
 
   StackEntry stack[kWideStackSize];
@@ -237,7 +244,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
-  const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const TriangleRay tri_ray = make_wide_triangle_ray(ray);
   const PrimitiveStore& prims = *bvh.prims;
 
   std::uint32_t stack[kWideStackSize + kWideStackSlack];
