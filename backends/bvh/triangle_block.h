@@ -89,7 +89,7 @@ struct EdgeLanes {
   return {candidates, exact_zero};
 }
 
-template <Report kReport, bool kDivisionFreeFirst = false>
+template <Report kReport, bool kDivisionFreeFirst = false, bool kBySign = false>
 [[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
                                                  float tmin, float tmax, BlockHits& out) {
   const auto [candidates, exact_zero] = edge_test(ray, block, lanes);
@@ -107,7 +107,7 @@ template <Report kReport, bool kDivisionFreeFirst = false>
       return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
     };
     if constexpr (kReport == Report::kAny) {
-      if (refine_detail::refine_in_interval<kDivisionFreeFirst>(ray.refine, p0, p1, p2, tmin, tmax, exact))
+      if (refine_detail::refine_in_interval<kDivisionFreeFirst, kBySign>(ray.refine, p0, p1, p2, tmin, tmax, exact))
         return 1u << lane;
       continue;
     } else {
@@ -183,12 +183,13 @@ template <typename OnHit>
 
 // Whether any lane is hit within [tmin, tmax] (a non-zero mask of one of them): any-hit queries. A crossing
 // whose t interval lies inside [tmin, tmax] counts without its rounding being certified.
-// kDivisionFreeFirst: see refine_detail::refine_in_interval_v (bvh passes true, bvh8 not yet).
-template <bool kDivisionFreeFirst = false>
+// kDivisionFreeFirst, kBySign: see refine_detail::refine_in_interval_v (bvh passes kDivisionFreeFirst, bvh8
+// kBySign; a valid ray's 0 <= tmin <= tmax).
+template <bool kDivisionFreeFirst = false, bool kBySign = false>
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_any(const TriangleRay& ray, const TriangleBlock& block,
                                                                     unsigned lanes, float tmin, float tmax) {
   BlockHits unused;
-  return triangle_block_detail::intersect<triangle_block_detail::Report::kAny, kDivisionFreeFirst>(
+  return triangle_block_detail::intersect<triangle_block_detail::Report::kAny, kDivisionFreeFirst, kBySign>(
       ray, block, lanes, tmin, tmax, unused);
 }
 

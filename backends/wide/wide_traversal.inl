@@ -223,7 +223,11 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       const unsigned in_block = lanes & kWideBlockLaneMask;
       if constexpr (kStats) prims_tested += static_cast<unsigned>(__builtin_popcount(in_block));
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, *block, in_block, ray.tmin, ray.tmax) != 0) return true;
+      // Crossings behind the origin (the triangle a secondary ray leaves) and well inside are decided without
+      // the quotient (kBySign, triangle_refine.h).
+      if (intersect_triangle_block_any</*kDivisionFreeFirst=*/false, /*kBySign=*/true>(tri_ray, *block, in_block,
+                                                                                    ray.tmin, ray.tmax) != 0)
+        return true;
       lanes >>= kTriangleBlockLanes;
       if (lanes == 0) break;
     }
