@@ -494,10 +494,10 @@ TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const 
   return refine_t(ray, p0, p1, p2, tmin, tmax, t,
                   [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
-template <bool kDivisionFreeFirst = false, typename Vec3>
+template <bool kDivisionFreeFirst = false, bool kBySign = false, typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
                                               float tmin, float tmax) {
-  return refine_in_interval<kDivisionFreeFirst>(ray, p0, p1, p2, tmin, tmax,
+  return refine_in_interval<kDivisionFreeFirst, kBySign>(ray, p0, p1, p2, tmin, tmax,
                             [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>
