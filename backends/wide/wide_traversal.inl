@@ -210,6 +210,29 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   return true;
 }
 
+// Any hit in one block: triangle_block.h's any-hit test (Report::kAny), with the candidates' vertices gathered
+// by this instruction set's block_vertex and their crossings decided by the sign of t first (kBySign,
+// triangle_refine.h): the same answers.
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool block_occluded(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes, float tmin,
+                                          float tmax) {
+  using namespace triangle_block_detail;
+  const EdgeLanes edges = edge_test(ray, block, lanes);
+  if ((edges.candidates | edges.exact_zero) == 0) return false;  // the ray passes beside all four
+  for (unsigned m = edges.candidates; m != 0; m &= m - 1) {
+    const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
+    const auto exact = [&ray, &block, lane](float& te, float& ue, float& ve) {
+      return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+    };
+    if (refine_detail::refine_in_interval_v</*kDivisionFreeFirst=*/false, /*kBySign=*/true>(
+            ray.refine, block_vertex(block, 0, lane), block_vertex(block, 1, lane), block_vertex(block, 2, lane), tmin,
+            tmax, exact))
+      return true;
+  }
+  if (edges.exact_zero == 0) return false;
+  BlockHits unused;
+  return decide_in_double<Report::kAny>(ray, block, edges.exact_zero, tmin, tmax, unused) != 0;
+}
+
 // Any hit in one leaf. Counts the primitives it tests when kStats.
 template <bool kTriangles, bool kSpheres, bool kStats>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
@@ -224,10 +247,8 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       if constexpr (kStats) prims_tested += static_cast<unsigned>(__builtin_popcount(in_block));
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
       // Crossings behind the origin (the triangle a secondary ray leaves) and well inside are decided without
-      // the quotient (kBySign, triangle_refine.h).
-      if (intersect_triangle_block_any</*kDivisionFreeFirst=*/false, /*kBySign=*/true>(tri_ray, *block, in_block,
-                                                                                    ray.tmin, ray.tmax) != 0)
-        return true;
+      // the quotient (block_occluded).
+      if (block_occluded(tri_ray, *block, in_block, ray.tmin, ray.tmax)) return true;
       lanes >>= kTriangleBlockLanes;
       if (lanes == 0) break;
     }
