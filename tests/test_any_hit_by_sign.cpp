@@ -1,6 +1,7 @@
 // bvh8's any-hit leaves decide a candidate by the sign of its t first (refine_in_interval_v with kBySign,
 // triangle_refine.h): certainly_behind drops a crossing whose exact t is at most -2^-126, certainly_inside
-// accepts one strictly inside the interval, the quotient decides the rest. And the block edge test sends a lane
+// accepts one strictly inside the interval, the quotient decides the rest; its closest-hit leaves drop a
+// crossing certainly_behind before the quotient (refine_t_kept_v with kBehindFirst). And the block edge test sends a lane
 // whose product u v w is 0 or NaN (or underflows) to the scalar test (triangle_block.h). Neither may change an
 // answer: checked here against the correctly rounded t on adversarial crossings (origins exactly on the
 // triangle, on its edges and vertices, a few ulps off it either side, Wächter-Binder offsets, grazing and
@@ -83,6 +84,17 @@ void check_crossing(const glm::vec3& o, const glm::vec3& d, const glm::vec3& p0,
         refine_detail::refine_in_interval</*kDivisionFreeFirst=*/false, /*kBySign=*/true>(ray, p0, p1, p2, iv[0], iv[1]);
     EXPECT_EQ(by_sign, expected) << "interval [" << iv[0] << ", " << iv[1] << "]";
     counts.agreeing += by_sign == expected ? 1 : 0;
+    // Closest hit drops a crossing certainly behind before the quotient (kBehindFirst): the same t, or none.
+    if (!(iv[0] >= 0.0f)) continue;
+    Crossing kept;
+    float t_behind_first = 0.0f;
+    const bool found = refine_detail::refine_t</*kBehindFirst=*/true>(
+        ray, p0, p1, p2, iv[0], iv[1], t_behind_first, kept,
+        [&](float& te, float& ue, float& ve) { return refine_detail::exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
+    EXPECT_EQ(found, expected) << "closest, interval [" << iv[0] << ", " << iv[1] << "]";
+    if (found && expected) {
+      EXPECT_EQ(t_behind_first, t);
+    }
   }
 }
 

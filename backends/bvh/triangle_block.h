@@ -93,7 +93,7 @@ struct EdgeLanes {
   return {candidates, exact_zero};
 }
 
-template <Report kReport, bool kDivisionFreeFirst = false, bool kBySign = false>
+template <Report kReport, bool kDivisionFreeFirst = false>
 [[gnu::always_inline]] inline unsigned intersect(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes,
                                                  float tmin, float tmax, BlockHits& out) {
   const auto [candidates, exact_zero] = edge_test(ray, block, lanes);
@@ -111,7 +111,7 @@ template <Report kReport, bool kDivisionFreeFirst = false, bool kBySign = false>
       return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
     };
     if constexpr (kReport == Report::kAny) {
-      if (refine_detail::refine_in_interval<kDivisionFreeFirst, kBySign>(ray.refine, p0, p1, p2, tmin, tmax, exact))
+      if (refine_detail::refine_in_interval<kDivisionFreeFirst>(ray.refine, p0, p1, p2, tmin, tmax, exact))
         return 1u << lane;
       continue;
     } else {
@@ -140,7 +140,8 @@ template <Report kReport, bool kDivisionFreeFirst = false, bool kBySign = false>
 // (refine_detail::Crossing: e1, e2, e1 x e2, den), for the caller to keep if the lane is its best so far and
 // give to triangle_block_hit_attributes at the end, which then need not compute it again; nullptr for a lane
 // decided in double (a ray through an edge or vertex), whose attributes are computed from the block.
-template <typename OnHit>
+// kBehindFirst: see refine_detail::refine_t_kept_v (bvh8 passes true; a valid ray's tmin >= 0).
+template <bool kBehindFirst = false, typename OnHit>
 [[gnu::always_inline]] inline void intersect_triangle_block_closest(const TriangleRay& ray, const TriangleBlock& block,
                                                                     unsigned lanes, float tmin, float tmax,
                                                                     const OnHit& on_hit) {
@@ -151,7 +152,7 @@ template <typename OnHit>
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
     refine_detail::Crossing crossing;
     float t;
-    if (!refine_detail::refine_t(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), tmin,
+    if (!refine_detail::refine_t<kBehindFirst>(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), tmin,
                                  tmax, t, crossing, [&ray, &block, lane](float& te, float& ue, float& ve) {
                                    return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
                                  }))
@@ -187,13 +188,13 @@ template <typename OnHit>
 
 // Whether any lane is hit within [tmin, tmax] (a non-zero mask of one of them): any-hit queries. A crossing
 // whose t interval lies inside [tmin, tmax] counts without its rounding being certified.
-// kDivisionFreeFirst, kBySign: see refine_detail::refine_in_interval_v (bvh passes kDivisionFreeFirst, bvh8
-// kBySign; a valid ray's 0 <= tmin <= tmax).
-template <bool kDivisionFreeFirst = false, bool kBySign = false>
+// kDivisionFreeFirst: see refine_detail::refine_in_interval_v (bvh passes true; bvh8's any-hit leaves run their
+// own copy of this loop, block_occluded in backends/wide/wide_traversal.inl, deciding by the sign of t).
+template <bool kDivisionFreeFirst = false>
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_any(const TriangleRay& ray, const TriangleBlock& block,
                                                                     unsigned lanes, float tmin, float tmax) {
   BlockHits unused;
-  return triangle_block_detail::intersect<triangle_block_detail::Report::kAny, kDivisionFreeFirst, kBySign>(
+  return triangle_block_detail::intersect<triangle_block_detail::Report::kAny, kDivisionFreeFirst>(
       ray, block, lanes, tmin, tmax, unused);
 }
 

@@ -155,7 +155,8 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
         std::uint32_t block_slot = leaf.block * kTriangleBlockLanes;
         for (std::uint32_t lanes = leaf.lanes;; ++block, block_slot += kTriangleBlockLanes) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
-          intersect_triangle_block_closest(
+          // The triangle a secondary ray leaves is dropped before the quotient (kBehindFirst).
+          intersect_triangle_block_closest</*kBehindFirst=*/true>(
               tri_ray, *block, lanes & kWideBlockLaneMask, ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
                 const std::uint32_t slot = block_slot + lane;
@@ -213,8 +214,9 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 // Any hit in one block: triangle_block.h's any-hit test (Report::kAny), with the candidates' vertices gathered
 // by this instruction set's block_vertex and their crossings decided by the sign of t first (kBySign,
 // triangle_refine.h): the same answers.
-[[gnu::always_inline]] TWINRAY_KERNEL inline bool block_occluded(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes, float tmin,
-                                          float tmax) {
+// Forced inline: GCC called it out of line, which cost 21 instructions per dragon shadow query.
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool block_occluded(const TriangleRay& ray, const TriangleBlock& block,
+                                                                 unsigned lanes, float tmin, float tmax) {
   using namespace triangle_block_detail;
   const EdgeLanes edges = edge_test(ray, block, lanes);
   if ((edges.candidates | edges.exact_zero) == 0) return false;  // the ray passes beside all four

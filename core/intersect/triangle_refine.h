@@ -369,13 +369,16 @@ template <typename Vec3>
 // the exact path for the same triangle. `c` is left holding the crossing (e1, e2, a, e1 x e2, den): a
 // closest-hit traversal keeps the winner's and certifies its u, v from it (refine_uv_kept) instead of
 // computing the same numbers again.
-template <typename Exact>
+// kBehindFirst (bvh8's closest-hit leaves; a valid ray's tmin >= 0): a crossing certainly_behind the origin
+// is dropped before the quotient.
+template <bool kBehindFirst = false, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t_kept_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
                                            float tmin, float tmax, float& t_out, Crossing& c, const Exact& exact) {
   float t = 0.0f;
   bool certain = false;
   // The reciprocal and w that u, v need are left to refine_uv_kept (the winner only): t_ends needs neither.
   if (crossing_sums(ray, p0, p1, p2, c)) {
+    if (kBehindFirst && certainly_behind(c)) return false;
     const Ends ends = t_ends(c);
     // Certainly outside: every t within the bound rounds below tmin or above tmax. (Most rejected
     // candidates end here: the triangle a secondary ray starts from, crossings beyond the closest hit.)
@@ -468,10 +471,10 @@ TWINRAY_REFINE_INLINE void set_ray(RefineRay& ray, const Vec3& o, const Vec3& d)
   ray.d = load(d);
   ray.abs_d = abs(ray.d);
 }
-template <typename Vec3, typename Exact>
+template <bool kBehindFirst = false, typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
                                     float tmax, float& t, Crossing& kept, const Exact& exact) {
-  return refine_t_kept_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, kept, exact);
+  return refine_t_kept_v<kBehindFirst>(ray, load(p0), load(p1), load(p2), tmin, tmax, t, kept, exact);
 }
 template <typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
