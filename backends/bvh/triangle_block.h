@@ -75,13 +75,17 @@ struct EdgeLanes {
   const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
   const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
 
-  const __m128 zero = _mm_setzero_ps();
   // The scalar test's detour (triangle_detail::needs_double): an edge function exactly 0, or NaN (products
-  // that overflowed, far out in float's range).
-  const __m128 ordered = _mm_and_ps(_mm_cmpord_ps(u, v), _mm_cmpord_ps(w, w));
-  const __m128 non_zero =
-      _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(u, zero), _mm_cmpneq_ps(v, zero)), _mm_cmpneq_ps(w, zero));
-  const unsigned exact_zero = ~static_cast<unsigned>(_mm_movemask_ps(_mm_and_ps(ordered, non_zero))) & lanes;
+  // that overflowed, far out in float's range). Then the product u v w is 0 or NaN, which 0 < |u v w| rejects
+  // (an ordered comparison: false for NaN), in four operations instead of ten. The converse fails only when
+  // the product underflows (edge functions below about 2^-42 each, at which point the lanes' sheared
+  // coordinates are below about 2^-21 of one unit from the ray): such a lane also goes to the scalar test,
+  // which decides it the same way, only slower. An infinite product (overflow) passes, as infinite edge
+  // functions did (they have the exact sign).
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 magnitude = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  const __m128 decided = _mm_cmplt_ps(zero, _mm_and_ps(_mm_mul_ps(_mm_mul_ps(u, v), w), magnitude));
+  const unsigned exact_zero = ~static_cast<unsigned>(_mm_movemask_ps(decided)) & lanes;
   // Among the others (none 0 or NaN) the signs are mixed exactly when the sign bits differ.
   const unsigned mixed_signs =
       static_cast<unsigned>(_mm_movemask_ps(_mm_or_ps(_mm_xor_ps(u, v), _mm_xor_ps(u, w))));
@@ -136,7 +140,8 @@ template <Report kReport, bool kDivisionFreeFirst = false>
 // (refine_detail::Crossing: e1, e2, e1 x e2, den), for the caller to keep if the lane is its best so far and
 // give to triangle_block_hit_attributes at the end, which then need not compute it again; nullptr for a lane
 // decided in double (a ray through an edge or vertex), whose attributes are computed from the block.
-template <typename OnHit>
+// kBehindFirst: see refine_detail::refine_t_kept_v (bvh8 passes true; a valid ray's tmin >= 0).
+template <bool kBehindFirst = false, typename OnHit>
 [[gnu::always_inline]] inline void intersect_triangle_block_closest(const TriangleRay& ray, const TriangleBlock& block,
                                                                     unsigned lanes, float tmin, float tmax,
                                                                     const OnHit& on_hit) {
@@ -147,7 +152,7 @@ template <typename OnHit>
     const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
     refine_detail::Crossing crossing;
     float t;
-    if (!refine_detail::refine_t(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), tmin,
+    if (!refine_detail::refine_t<kBehindFirst>(ray.refine, block.vertex(0, lane), block.vertex(1, lane), block.vertex(2, lane), tmin,
                                  tmax, t, crossing, [&ray, &block, lane](float& te, float& ue, float& ve) {
                                    return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
                                  }))
@@ -183,7 +188,8 @@ template <typename OnHit>
 
 // Whether any lane is hit within [tmin, tmax] (a non-zero mask of one of them): any-hit queries. A crossing
 // whose t interval lies inside [tmin, tmax] counts without its rounding being certified.
-// kDivisionFreeFirst: see refine_detail::refine_in_interval_v (bvh passes true, bvh8 not yet).
+// kDivisionFreeFirst: see refine_detail::refine_in_interval_v (bvh passes true; bvh8's any-hit leaves run their
+// own copy of this loop, block_occluded in backends/wide/wide_traversal.inl, deciding by the sign of t).
 template <bool kDivisionFreeFirst = false>
 [[gnu::always_inline]] inline unsigned intersect_triangle_block_any(const TriangleRay& ray, const TriangleBlock& block,
                                                                     unsigned lanes, float tmin, float tmax) {

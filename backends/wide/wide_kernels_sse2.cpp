@@ -21,6 +21,15 @@ namespace twinray::wide_sse2 {
 
 #define TWINRAY_KERNEL
 
+// The ray in double for the refinement: set_ray's scalar conversions (the AVX kernels convert each half of
+// the ray at once, wide_box_test_256.inl).
+inline void set_refine_ray(refine_detail::RefineRay& r, const Ray& ray) { refine_detail::set_ray(r, ray.org, ray.dir); }
+
+// Vertex `vert` of lane `lane` of a block as the refinement's doubles (refine_detail::load's conversions).
+inline refine_detail::Vec4 block_vertex(const TriangleBlock& block, unsigned vert, unsigned lane) {
+  return refine_detail::load(block.vertex(vert, lane));
+}
+
 // The ray as the slab test needs it: origin and reciprocal direction broadcast, and per axis the row
 // offsets (WideNode::lo_row / hi_row) of the near and far planes, chosen by the sign of the reciprocal (-0
 // included) as in ray_box.h. The reciprocals come from one vector division (each lane the same IEEE

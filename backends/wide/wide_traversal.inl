@@ -95,6 +95,13 @@ TWINRAY_KERNEL inline std::uint32_t order_children(const WideNode& node, unsigne
 
 namespace wide_detail {
 
+// The triangle test's ray: the sheared frame, and the ray in double by this instruction set's set_refine_ray.
+TWINRAY_KERNEL inline TriangleRay make_wide_triangle_ray(const Ray& ray) {
+  TriangleRay r = make_triangle_ray_frame(ray.org, ray.dir);
+  set_refine_ray(r.refine, ray);
+  return r;
+}
+
 // Tells the compiler that the ray's broadcast vectors may have changed in memory, so it reads them from
 // there at their next uses instead of keeping copies in registers.
 TWINRAY_KERNEL inline void reread_vectors(WideBoxRay& r) {
@@ -110,7 +117,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
                                                                  QueryStats* stats) {
   hit = Hit{};
   WideBoxRay box_ray(ray);
-  [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  [[maybe_unused]] const TriangleRay tri_ray = make_wide_triangle_ray(ray);
   const PrimitiveStore& prims = *bvh.prims;
 
   StackEntry stack[kWideStackSize];
@@ -148,7 +155,8 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
         std::uint32_t block_slot = leaf.block * kTriangleBlockLanes;
         for (std::uint32_t lanes = leaf.lanes;; ++block, block_slot += kTriangleBlockLanes) {
           // t only: the winner's u, v are computed once, at the end, from its kept crossing.
-          intersect_triangle_block_closest(
+          // The triangle a secondary ray leaves is dropped before the quotient (kBehindFirst).
+          intersect_triangle_block_closest</*kBehindFirst=*/true>(
               tri_ray, *block, lanes & kWideBlockLaneMask, ray.tmin, tmax,
               [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
                 const std::uint32_t slot = block_slot + lane;
@@ -203,6 +211,30 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   return true;
 }
 
+// Any hit in one block: triangle_block.h's any-hit test (Report::kAny), with the candidates' vertices gathered
+// by this instruction set's block_vertex and their crossings decided by the sign of t first (kBySign,
+// triangle_refine.h): the same answers.
+// Forced inline: GCC called it out of line, which cost 21 instructions per dragon shadow query.
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool block_occluded(const TriangleRay& ray, const TriangleBlock& block,
+                                                                 unsigned lanes, float tmin, float tmax) {
+  using namespace triangle_block_detail;
+  const EdgeLanes edges = edge_test(ray, block, lanes);
+  if ((edges.candidates | edges.exact_zero) == 0) return false;  // the ray passes beside all four
+  for (unsigned m = edges.candidates; m != 0; m &= m - 1) {
+    const unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
+    const auto exact = [&ray, &block, lane](float& te, float& ue, float& ve) {
+      return exact_crossing_of_lane(ray, block, lane, te, ue, ve);
+    };
+    if (refine_detail::refine_in_interval_v</*kDivisionFreeFirst=*/false, /*kBySign=*/true>(
+            ray.refine, block_vertex(block, 0, lane), block_vertex(block, 1, lane), block_vertex(block, 2, lane), tmin,
+            tmax, exact))
+      return true;
+  }
+  if (edges.exact_zero == 0) return false;
+  BlockHits unused;
+  return decide_in_double<Report::kAny>(ray, block, edges.exact_zero, tmin, tmax, unused) != 0;
+}
+
 // Any hit in one leaf. Counts the primitives it tests when kStats.
 template <bool kTriangles, bool kSpheres, bool kStats>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
@@ -216,7 +248,9 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       const unsigned in_block = lanes & kWideBlockLaneMask;
       if constexpr (kStats) prims_tested += static_cast<unsigned>(__builtin_popcount(in_block));
       // Membership in [tmin, tmax] only: no t is certified unless it lies at an end of the interval.
-      if (intersect_triangle_block_any(tri_ray, *block, in_block, ray.tmin, ray.tmax) != 0) return true;
+      // Crossings behind the origin (the triangle a secondary ray leaves) and well inside are decided without
+      // the quotient (block_occluded).
+      if (block_occluded(tri_ray, *block, in_block, ray.tmin, ray.tmax)) return true;
       lanes >>= kTriangleBlockLanes;
       if (lanes == 0) break;
     }
@@ -237,7 +271,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
-  const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
+  const TriangleRay tri_ray = make_wide_triangle_ray(ray);
   const PrimitiveStore& prims = *bvh.prims;
 
   std::uint32_t stack[kWideStackSize + kWideStackSlack];

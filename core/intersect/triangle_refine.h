@@ -228,6 +228,17 @@ TWINRAY_REFINE_INLINE bool certainly_inside(const Crossing& c, float tmin, float
   return s_num - c.num_err > lower * (1.0 + 0x1p-48) && upper * (1.0 - 0x1p-48) > s_num + c.num_err;
 }
 
+// Whether the exact t of a crossing whose den's sign is certain is at most -2^-126, so that its rounded t
+// (flushed to zero or not) lies below every tmin >= 0: decided without the quotient. With s the sign of D,
+// sN <= sN^ + En =: a and 2^-126 |D| <= 2^-126 (|D^| + Ed) <= 0.375 b with b = 2^-124 |D^| (exact: a power of
+// two times a double far above 2^-1022) and Ed < |D^| / 2; the computed fl(fl(a) + b) < 0 means a (1 + d) < -b,
+// |d| <= 2^-53, so sN + 2^-126 |D| <= a + 0.375 b < -b (1 - 2^-53) + 0.375 b < 0, i.e. t = sN / |D| < -2^-126.
+// A sum flushed to zero (FTZ) fails the strict test.
+TWINRAY_REFINE_INLINE bool certainly_behind(const Crossing& c) {
+  const double s_num = c.den > 0.0 ? c.num : -c.num;
+  return (s_num + c.num_err) + 0x1p-124 * c.quotient.abs_den < 0.0;
+}
+
 // normalize(n) rounded to float, (0, 0, 1) for a zero n (collinear vertices, which the edge test never hits):
 // the geometric normal. One function for triangle_geometric_normal and refine_uv's, so both give the same
 // bits.
@@ -358,13 +369,16 @@ template <typename Vec3>
 // the exact path for the same triangle. `c` is left holding the crossing (e1, e2, a, e1 x e2, den): a
 // closest-hit traversal keeps the winner's and certifies its u, v from it (refine_uv_kept) instead of
 // computing the same numbers again.
-template <typename Exact>
+// kBehindFirst (bvh8's closest-hit leaves; a valid ray's tmin >= 0): a crossing certainly_behind the origin
+// is dropped before the quotient.
+template <bool kBehindFirst = false, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t_kept_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
                                            float tmin, float tmax, float& t_out, Crossing& c, const Exact& exact) {
   float t = 0.0f;
   bool certain = false;
   // The reciprocal and w that u, v need are left to refine_uv_kept (the winner only): t_ends needs neither.
   if (crossing_sums(ray, p0, p1, p2, c)) {
+    if (kBehindFirst && certainly_behind(c)) return false;
     const Ends ends = t_ends(c);
     // Certainly outside: every t within the bound rounds below tmin or above tmax. (Most rejected
     // candidates end here: the triangle a secondary ray starts from, crossings beyond the closest hit.)
@@ -392,11 +406,23 @@ TWINRAY_REFINE_INLINE bool refine_t_v(const RefineRay& ray, const Vec4& p0, cons
 // asked before the quotient is computed (the same answers; a shorter chain for a crossing well inside, a
 // few instructions more for one that is not): `bvh` and `brute` use it; `bvh8`'s kernels do not yet (on
 // them it cost 0.5% more instructions on dragon shadow rays, docs/bvh-backend.md, sixth round).
-template <bool kDivisionFreeFirst = false, typename Exact>
+//
+// With kBySign (bvh8's any-hit leaves; a valid ray's 0 <= tmin <= tmax), the sign of the crossing's t decides
+// which division-free test is asked first: a crossing behind the origin (the triangle a secondary ray starts
+// from, 0.6 of the 1.13 candidates of a dragon shadow ray) is dropped by certainly_behind, one ahead is
+// accepted by certainly_inside; either failing, the quotient decides as without it. The same answers.
+template <bool kDivisionFreeFirst = false, bool kBySign = false, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_in_interval_v(const RefineRay& ray, const Vec4& p0, const Vec4& p1, const Vec4& p2,
                                                 float tmin, float tmax, const Exact& exact) {
   Crossing c;
   if (crossing_sums(ray, p0, p1, p2, c)) {
+    if constexpr (kBySign) {
+      if ((c.den > 0.0 ? c.num : -c.num) < 0.0) {
+        if (certainly_behind(c)) return false;
+      } else if (certainly_inside(c, tmin, tmax)) {
+        return true;
+      }
+    }
     if (kDivisionFreeFirst && certainly_inside(c, tmin, tmax)) return true;
     const Ends ends = t_ends(c);
     if (ends.hi < tmin || ends.lo > tmax) return false;
@@ -445,20 +471,20 @@ TWINRAY_REFINE_INLINE void set_ray(RefineRay& ray, const Vec3& o, const Vec3& d)
   ray.d = load(d);
   ray.abs_d = abs(ray.d);
 }
-template <typename Vec3, typename Exact>
+template <bool kBehindFirst = false, typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
                                     float tmax, float& t, Crossing& kept, const Exact& exact) {
-  return refine_t_kept_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, kept, exact);
+  return refine_t_kept_v<kBehindFirst>(ray, load(p0), load(p1), load(p2), tmin, tmax, t, kept, exact);
 }
 template <typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float tmin,
                                     float tmax, float& t, const Exact& exact) {
   return refine_t_v(ray, load(p0), load(p1), load(p2), tmin, tmax, t, exact);
 }
-template <bool kDivisionFreeFirst = false, typename Vec3, typename Exact>
+template <bool kDivisionFreeFirst = false, bool kBySign = false, typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
                                               float tmin, float tmax, const Exact& exact) {
-  return refine_in_interval_v<kDivisionFreeFirst>(ray, load(p0), load(p1), load(p2), tmin, tmax, exact);
+  return refine_in_interval_v<kDivisionFreeFirst, kBySign>(ray, load(p0), load(p1), load(p2), tmin, tmax, exact);
 }
 template <typename Vec3, typename Exact>
 TWINRAY_REFINE_INLINE void refine_uv(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2, float t,
@@ -471,10 +497,10 @@ TWINRAY_REFINE_INLINE bool refine_t(const RefineRay& ray, const Vec3& p0, const 
   return refine_t(ray, p0, p1, p2, tmin, tmax, t,
                   [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
-template <bool kDivisionFreeFirst = false, typename Vec3>
+template <bool kDivisionFreeFirst = false, bool kBySign = false, typename Vec3>
 TWINRAY_REFINE_INLINE bool refine_in_interval(const RefineRay& ray, const Vec3& p0, const Vec3& p1, const Vec3& p2,
                                               float tmin, float tmax) {
-  return refine_in_interval<kDivisionFreeFirst>(ray, p0, p1, p2, tmin, tmax,
+  return refine_in_interval<kDivisionFreeFirst, kBySign>(ray, p0, p1, p2, tmin, tmax,
                             [&](float& te, float& ue, float& ve) { return exact_crossing_of(ray, p0, p1, p2, te, ue, ve); });
 }
 template <typename Vec3>

@@ -65,7 +65,9 @@ struct TriangleRay {
   refine_detail::RefineRay refine;  // the ray itself in double, for the t, u, v of triangle_refine.h
 };
 
-inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir) {
+// The permutation, shear and permuted origin only: `refine` is left for the caller to fill with the ray in
+// double (set_ray, or a kernel's vector conversion of the same floats, which gives the same doubles).
+inline TriangleRay make_triangle_ray_frame(const glm::vec3& org, const glm::vec3& dir) {
   TriangleRay r;
   const WoopAxes axes = woop_axes(dir);
   r.kx = axes.kx;
@@ -80,6 +82,10 @@ inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir)
   r.ox = o[r.kx];
   r.oy = o[r.ky];
   r.oz = o[r.kz];
+  return r;
+}
+inline TriangleRay make_triangle_ray(const glm::vec3& org, const glm::vec3& dir) {
+  TriangleRay r = make_triangle_ray_frame(org, dir);
   refine_detail::set_ray(r.refine, org, dir);
   return r;
 }
