@@ -89,6 +89,39 @@ TEST(GradeLbvh, GrazingFloatTriangleTestIsNotTOff) {
   EXPECT_EQ(off.reason, arbiter::Reason::TOff) << off.detail;
 }
 
+// The arbiter's shortcut for identical copies (arbiter.cpp): another copy of the exact hit at its t is a tie
+// for a backend that does not claim the rule (the LBVH names copies in traversal order), but a copy at a
+// wrong t is still wrong, and a backend that claims the rule is still held to the lowest id.
+TEST(GradeLbvh, IdenticalCopiesAreTiesButNotBlindly) {
+  SceneGeometry g;
+  for (std::uint32_t id = 0; id < 2; ++id) {
+    TriangleMesh m;
+    m.geom_id = id;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.indices = {{0, 1, 2}};
+    m.positions.reserve(4);
+    g.meshes.push_back(m);
+  }
+  const arbiter::Arbiter judge(g);
+  Ray ray;
+  ray.org = {0.25f, 0.25f, 1.0f};
+  ray.dir = {0.0f, 0.0f, -1.0f};
+  const BackendTraits loose{.counts_traversal = true, .honours_ties = false, .watertight = false};
+  const BackendTraits claims{.counts_traversal = true, .honours_ties = true, .watertight = false};
+  Hit copy;
+  copy.geom_id = 1;
+  copy.prim_id = 0;
+  copy.t = 1.0f;
+  const arbiter::Ruling tie = judge.rule_closest(ray, copy, loose);
+  EXPECT_TRUE(tie.right) << tie.detail;
+  EXPECT_EQ(tie.reason, arbiter::Reason::Tie) << tie.detail;
+  EXPECT_EQ(judge.rule_closest(ray, copy, claims).reason, arbiter::Reason::TieBrokenWrongly);
+  copy.t = 0.5f;
+  const arbiter::Ruling off = judge.rule_closest(ray, copy, loose);
+  EXPECT_FALSE(off.right) << off.detail;
+  EXPECT_EQ(off.reason, arbiter::Reason::TOff) << off.detail;
+}
+
 struct LbvhBug {
   std::string bug;
   std::string caught_by;
