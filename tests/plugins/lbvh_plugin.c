@@ -253,7 +253,7 @@ static int lbvh_build(void* self, const twinray_geometry* g, char* error, size_t
   b->prims = (prim*)malloc(n * sizeof(prim));
   b->leaf_box = (box*)malloc(n * sizeof(box));
   b->nodes = (node*)malloc((n > 1 ? n - 1 : 1) * sizeof(node));
-  parent = (unsigned*)malloc(2 * n * sizeof(unsigned));
+  parent = (unsigned*)calloc(2 * n, sizeof(unsigned)); /* zero: defined even where a broken build leaves gaps */
   arrived = (unsigned char*)calloc(n, 1);
   if (!all || !boxes || !keys || !b->prims || !b->leaf_box || !b->nodes || !parent || !arrived) {
     free(all);
