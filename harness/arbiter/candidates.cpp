@@ -76,6 +76,14 @@ void evaluate_triangle(const TriangleMesh& mesh, std::uint32_t prim, const Ray& 
   c.t = x.t;
   c.t_exact = x.t_double;
   c.hit = x.hit && c.crossing && c.t >= ray.tmin && c.t <= ray.tmax;
+  if (c.crossing) {  // tolerances.h, kGrazeT
+    const glm::dvec3 n = glm::cross(p[1] - p[0], p[2] - p[0]);
+    const double twice_area = glm::length(n), d_length = glm::length(d);
+    const double longest2 = std::max({glm::dot(p[1] - p[0], p[1] - p[0]), glm::dot(p[2] - p[1], p[2] - p[1]),
+                                      glm::dot(p[0] - p[2], p[0] - p[2])});
+    const double cos_abs = std::fabs(glm::dot(n, d)) / (twice_area * d_length);
+    if (twice_area > 0.0 && cos_abs > 0.0) c.graze_t = kGrazeT * c.scale * (longest2 / twice_area) / (cos_abs * d_length);
+  }
 }
 
 void evaluate_sphere(const Sphere& s, const Ray& ray, const glm::dvec3& o, const glm::dvec3& d, Candidate& c) {
@@ -112,7 +120,7 @@ void evaluate_sphere(const Sphere& s, const Ray& ray, const glm::dvec3& o, const
 }  // namespace
 
 double Candidate::t_tolerance(double dir_length) const {
-  return kRelT * std::fabs(t_exact) + kWorld * scale / dir_length;
+  return kRelT * std::fabs(t_exact) + std::max(kWorld * scale / dir_length, graze_t);
 }
 
 ShapeIndex::ShapeIndex(const SceneGeometry& geometry) {

@@ -29,10 +29,11 @@ struct Candidate {
   double t_exact = 0.0;   // the same, to double precision
   double t_other = 0.0;   // spheres: the other root
   double graze_lo = 0.0, graze_hi = 0.0;  // spheres near the silhouette: the chord of the sphere grown by delta
+  double graze_t = 0.0;   // triangles: kGrazeT S K / (|cos| |d|), the rounding of t at grazing angles
   glm::vec3 vertex[3]{};  // triangles: the vertices; spheres: center in [0], radius in [1].x
 
   bool reachable() const { return distance <= delta; }
-  double t_tolerance(double dir_length) const;  // kRelT |t| + kWorld S / |d| at this primitive's t
+  double t_tolerance(double dir_length) const;  // kRelT |t| + max(kWorld S / |d|, graze_t) at this t
 };
 
 // The scene's shapes by geometry id, and the largest coordinate magnitude (which bounds S over the scene).
