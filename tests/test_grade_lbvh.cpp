@@ -25,31 +25,16 @@ std::filesystem::path lbvh_plugin(std::string bug = "") {
          (bug.empty() ? std::string("libtwinray_lbvh_plugin.so") : "libtwinray_lbvh_" + bug + "_plugin.so");
 }
 
+using testing::check_lines;
+using testing::check_named;
 Scorecard grade_lbvh(const std::filesystem::path& plugin, std::vector<std::string> only = {}) {
-  GradeSettings s;
-  s.plugin = plugin;
-  s.suite = testing::grading_test_suite().string();
-  s.only = std::move(only);
-  s.twinray = TWINRAY_BINARY;
-  return run_grade(s);
-}
-
-const CheckResult& named(const Scorecard& card, const std::string& name) {
-  for (const CheckResult& c : card.checks)
-    if (c.name == name) return c;
-  throw std::logic_error("no check " + name);
-}
-
-std::string all_lines(const Scorecard& card) {
-  std::string s;
-  for (const CheckResult& c : card.checks) s += terminal_check_line(c);
-  return s;
+  return testing::grade_with_test_suite(plugin, std::move(only));
 }
 
 TEST(GradeLbvh, CorrectLbvhGetsFullMarks) {
   const Scorecard card = grade_lbvh(lbvh_plugin());
-  EXPECT_TRUE(card.passed()) << all_lines(card);
-  EXPECT_EQ(card.score(), card.max_score()) << all_lines(card);
+  EXPECT_TRUE(card.passed()) << check_lines(card);
+  EXPECT_EQ(card.score(), card.max_score()) << check_lines(card);
   EXPECT_GT(card.max_score(), 0.0);
   for (const CheckResult& c : card.checks) {
     if (c.category == Category::Watertight || c.category == Category::Ties) {
@@ -135,13 +120,13 @@ class GradeLbvhBugs : public ::testing::TestWithParam<LbvhBug> {};
 TEST_P(GradeLbvhBugs, LoseThePointsOfTheirCheck) {
   const LbvhBug& b = GetParam();
   const Scorecard card = grade_lbvh(lbvh_plugin(b.bug), {b.caught_by, b.still_passes});
-  const CheckResult& caught = named(card, b.caught_by);
+  const CheckResult& caught = check_named(card, b.caught_by);
   EXPECT_EQ(caught.outcome, b.outcome) << terminal_check_line(caught);
   EXPECT_EQ(caught.points, 0.0);
   EXPECT_NE(caught.detail.find(b.detail_words), std::string::npos) << caught.detail;
   EXPECT_FALSE(caught.reproduce.empty());
   EXPECT_FALSE(card.passed());
-  EXPECT_EQ(named(card, b.still_passes).outcome, Outcome::Pass) << all_lines(card);
+  EXPECT_EQ(check_named(card, b.still_passes).outcome, Outcome::Pass) << check_lines(card);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -169,13 +154,13 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(GradeLbvh, QualityOnlyBugsKeepEveryAnswerRight) {
   const Scorecard good = grade_lbvh(lbvh_plugin(), {"closest-soup", "tree-quality-soup"});
   const auto nodes_per_ray = [](const Scorecard& card) {
-    return named(card, "tree-quality-soup").figures.at("nodes_per_ray").at("plugin").get<double>();
+    return check_named(card, "tree-quality-soup").figures.at("nodes_per_ray").at("plugin").get<double>();
   };
   const double good_nodes = nodes_per_ray(good);
   for (const std::string bug : {"morton-overflow", "slab-no-interval"}) {
     const Scorecard card = grade_lbvh(lbvh_plugin(bug), {"closest-soup", "tree-quality-soup"});
-    EXPECT_EQ(named(card, "closest-soup").outcome, Outcome::Pass) << bug << "\n" << all_lines(card);
-    const CheckResult& q = named(card, "tree-quality-soup");
+    EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << bug << "\n" << check_lines(card);
+    const CheckResult& q = check_named(card, "tree-quality-soup");
     EXPECT_EQ(q.outcome, Outcome::Pass) << bug << "\n" << terminal_check_line(q);
     EXPECT_GT(nodes_per_ray(card), good_nodes) << bug << "\n" << terminal_check_line(q);
   }

@@ -17,33 +17,18 @@
 namespace twinray::grade {
 namespace {
 
+using testing::check_lines;
+using testing::check_named;
 using testing::scotty_plugin;
 
 Scorecard grade(const std::filesystem::path& plugin, std::vector<std::string> only = {}) {
-  GradeSettings s;
-  s.plugin = plugin;
-  s.suite = testing::grading_test_suite().string();
-  s.only = std::move(only);
-  s.twinray = TWINRAY_BINARY;  // reproduce lines start the real program, as `twinray grade` writes them
-  return run_grade(s);
-}
-
-const CheckResult& check_named(const Scorecard& card, const std::string& name) {
-  for (const CheckResult& c : card.checks)
-    if (c.name == name) return c;
-  throw std::logic_error("no check " + name);
-}
-
-std::string lines(const Scorecard& card) {
-  std::string s;
-  for (const CheckResult& c : card.checks) s += terminal_check_line(c);
-  return s;
+  return testing::grade_with_test_suite(plugin, std::move(only));
 }
 
 TEST(GradePlugins, CorrectPluginGetsFullMarks) {
   const Scorecard card = grade(scotty_plugin());
-  EXPECT_TRUE(card.passed()) << lines(card);
-  EXPECT_EQ(card.score(), card.max_score()) << lines(card);
+  EXPECT_TRUE(card.passed()) << check_lines(card);
+  EXPECT_EQ(card.score(), card.max_score()) << check_lines(card);
   EXPECT_GT(card.max_score(), 0.0);
   for (const CheckResult& c : card.checks) EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
   // It claims watertight and the tie rule, so those checks count.
@@ -87,7 +72,7 @@ TEST_P(GradeBugs, LandInTheirCategoryWithTheirOutcome) {
   EXPECT_FALSE(caught.reproduce.empty());
   EXPECT_FALSE(card.passed());
   // The grader went on (in a fresh worker after a crash or timeout) and the untouched check passed.
-  EXPECT_EQ(check_named(card, b.still_passes).outcome, Outcome::Pass) << lines(card);
+  EXPECT_EQ(check_named(card, b.still_passes).outcome, Outcome::Pass) << check_lines(card);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -207,13 +192,13 @@ TEST(GradePlugins, CheatingPluginIsStoppedBySandbox) {
 // tiny ratio.
 TEST(GradePlugins, ImpossibleSahCostFailsTheThreshold) {
   const Scorecard card = grade(scotty_plugin("tiny-sah"), {"closest-soup", "tree-quality-soup"});
-  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << check_lines(card);
   const CheckResult& c = check_named(card, "tree-quality-soup");
   EXPECT_EQ(c.outcome, Outcome::Fail) << terminal_check_line(c);
   EXPECT_NE(c.detail.find("impossible SAH cost"), std::string::npos) << c.detail;
   // The correct tree passes the same threshold.
   const Scorecard good = grade(scotty_plugin(), {"closest-soup", "tree-quality-soup"});
-  EXPECT_EQ(check_named(good, "tree-quality-soup").outcome, Outcome::Pass) << lines(good);
+  EXPECT_EQ(check_named(good, "tree-quality-soup").outcome, Outcome::Pass) << check_lines(good);
 }
 
 // What a plugin names itself and says when its build fails reaches the scorecard as one line of plain text:
@@ -262,7 +247,7 @@ TEST(GradePlugins, RunningOutOfCheckTimeIsReproducedByTheCheckNotARay) {
 // check (tracing the ray it hit would answer normally).
 TEST(GradePlugins, CrashUnderConcurrencyIsReproducedByTheCheck) {
   const Scorecard card = grade(scotty_plugin("concurrent-crash"), {"closest-soup", "thread-safety-soup"});
-  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << check_lines(card);
   const CheckResult& c = check_named(card, "thread-safety-soup");
   EXPECT_EQ(c.outcome, Outcome::Crash) << terminal_check_line(c);
   EXPECT_NE(c.reproduce.find("--check thread-safety-soup"), std::string::npos) << c.reproduce;
@@ -346,7 +331,7 @@ TEST(GradePlugins, TimeBudgetCutsTheRunAndReportsTheRestAsTimeouts) {
   // A correct plugin is not cut by a budget it does not reach, and the flag replaces the manifest's budget.
   const Scorecard good = grade_with(scotty_plugin(), suite, 30.0);
   EXPECT_EQ(good.time_budget, 30.0);
-  EXPECT_TRUE(good.passed()) << lines(good);
+  EXPECT_TRUE(good.passed()) << check_lines(good);
   EXPECT_FALSE(grade_with(scotty_plugin(), suite, 0.0).time_budget.has_value());
   std::filesystem::remove_all(suite);
 }
@@ -468,12 +453,12 @@ TEST(GradePlugins, QuickSuiteCatchesAMeshIndexReportedAsGeomId) {
   s.only = {"closest-soup", "closest-mixed"};
   s.twinray = TWINRAY_BINARY;
   const Scorecard card = run_grade(s);
-  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << lines(card);  // one mesh, geom_id 0
-  EXPECT_EQ(check_named(card, "closest-mixed").outcome, Outcome::Fail) << lines(card);
+  EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << check_lines(card);  // one mesh, geom_id 0
+  EXPECT_EQ(check_named(card, "closest-mixed").outcome, Outcome::Fail) << check_lines(card);
   s.plugin = scotty_plugin();
   s.only = {"closest-mixed"};
   const Scorecard good = run_grade(s);
-  EXPECT_EQ(check_named(good, "closest-mixed").outcome, Outcome::Pass) << lines(good);
+  EXPECT_EQ(check_named(good, "closest-mixed").outcome, Outcome::Pass) << check_lines(good);
 }
 
 // The checks made for the fifth round's bugs fail no correct BVH: the brute-force plugin (no tree at all, the
