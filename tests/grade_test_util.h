@@ -6,6 +6,8 @@
 #include "harness/grade/reports.h"
 #include "tests/cli_runner.h"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -48,6 +50,28 @@ inline std::string check_lines(const grade::Scorecard& card) {
   std::string s;
   for (const grade::CheckResult& c : card.checks) s += grade::terminal_check_line(c);
   return s;
+}
+
+// A broken test plugin and where it must be caught: the check that must fail it (with this outcome and these
+// words in its detail) and a check of another category it does not touch, which must still pass.
+struct GradeBugCase {
+  std::string bug;
+  std::string caught_by;
+  grade::Outcome outcome;
+  std::string detail_words;
+  std::string still_passes;
+};
+
+// The scorecard of the two checks of `b`: the first lost with its points and a reproduce line, and the grader
+// went on (in a fresh worker after a crash or timeout) to pass the untouched one.
+inline void expect_caught(const grade::Scorecard& card, const GradeBugCase& b) {
+  const grade::CheckResult& caught = check_named(card, b.caught_by);
+  EXPECT_EQ(caught.outcome, b.outcome) << grade::terminal_check_line(caught);
+  EXPECT_EQ(caught.points, 0.0);
+  EXPECT_NE(caught.detail.find(b.detail_words), std::string::npos) << caught.detail;
+  EXPECT_FALSE(caught.reproduce.empty());
+  EXPECT_FALSE(card.passed());
+  EXPECT_EQ(check_named(card, b.still_passes).outcome, grade::Outcome::Pass) << check_lines(card);
 }
 
 }  // namespace twinray::testing

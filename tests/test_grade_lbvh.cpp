@@ -107,26 +107,13 @@ TEST(GradeLbvh, IdenticalCopiesAreTiesButNotBlindly) {
   EXPECT_EQ(off.reason, arbiter::Reason::TOff) << off.detail;
 }
 
-struct LbvhBug {
-  std::string bug;
-  std::string caught_by;
-  Outcome outcome;
-  std::string detail_words;
-  std::string still_passes;
-};
+using LbvhBug = testing::GradeBugCase;
 
 class GradeLbvhBugs : public ::testing::TestWithParam<LbvhBug> {};
 
 TEST_P(GradeLbvhBugs, LoseThePointsOfTheirCheck) {
   const LbvhBug& b = GetParam();
-  const Scorecard card = grade_lbvh(lbvh_plugin(b.bug), {b.caught_by, b.still_passes});
-  const CheckResult& caught = check_named(card, b.caught_by);
-  EXPECT_EQ(caught.outcome, b.outcome) << terminal_check_line(caught);
-  EXPECT_EQ(caught.points, 0.0);
-  EXPECT_NE(caught.detail.find(b.detail_words), std::string::npos) << caught.detail;
-  EXPECT_FALSE(caught.reproduce.empty());
-  EXPECT_FALSE(card.passed());
-  EXPECT_EQ(check_named(card, b.still_passes).outcome, Outcome::Pass) << check_lines(card);
+  testing::expect_caught(grade_lbvh(lbvh_plugin(b.bug), {b.caught_by, b.still_passes}), b);
 }
 
 INSTANTIATE_TEST_SUITE_P(
