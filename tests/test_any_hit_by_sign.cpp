@@ -163,8 +163,7 @@ TEST(AnyHitBySign, UnderflowingEdgeProductsTakeTheScalarTestAlike) {
   const Bounds3 box = g.bounds();
   std::vector<std::unique_ptr<Backend>> backends;
   std::vector<std::string> labels;
-  for (const Isa isa : {Isa::Sse2, Isa::Avx2, Isa::Avx512}) {
-    if (isa > cpu_isa()) continue;
+  for (const Isa isa : runnable_isas()) {
     backends.push_back(make_wide_backend({}, isa));
     labels.push_back("bvh8 " + std::string(to_string(isa)));
     backends.push_back(make_bvh_backend({}, isa));

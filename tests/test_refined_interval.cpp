@@ -68,8 +68,7 @@ TEST(RefinedInterval, EndsAtTheRoundedTDecideEveryBackendAlike) {
   backends.push_back(make_brute_backend());
   labels.emplace_back("brute");
   // The kernels of every instruction set (the refinement's vectors are two SSE2 operations or one AVX one).
-  for (const Isa isa : {Isa::Sse2, Isa::Avx2, Isa::Avx512}) {
-    if (isa > cpu_isa()) continue;
+  for (const Isa isa : runnable_isas()) {
     backends.push_back(make_bvh_backend({}, isa));
     labels.push_back("bvh " + std::string(to_string(isa)));
     backends.push_back(make_wide_backend({}, isa));

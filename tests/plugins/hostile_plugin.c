@@ -63,6 +63,7 @@
 
 void crash(void);
 void write_message(char* error, size_t capacity, const char* message);
+int start_detached(void* (*body)(void*), char* error, size_t capacity);
 
 static void* hostile_create(void) {
 #ifdef TWINRAY_HOSTILE_CREATE_CRASH
@@ -96,6 +97,17 @@ void write_message(char* error, size_t capacity, const char* message) {
 void crash(void) {
   volatile int* volatile nowhere = NULL;
   *nowhere = 1;
+}
+
+/* Starts `body` on a detached thread that outlives the call; 0, or TWINRAY_ERROR with the message set. */
+int start_detached(void* (*body)(void*), char* error, size_t capacity) {
+  pthread_t thread;
+  if (pthread_create(&thread, NULL, body, NULL) != 0) {
+    write_message(error, capacity, "pthread_create failed");
+    return TWINRAY_ERROR;
+  }
+  pthread_detach(thread);
+  return 0;
 }
 
 #ifdef TWINRAY_HOSTILE_NORMAL
@@ -183,14 +195,7 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   exit(0);
 #endif
 #ifdef TWINRAY_HOSTILE_THREAD_EXIT0
-  {
-    pthread_t thread;
-    if (pthread_create(&thread, NULL, exit_later, NULL) != 0) {
-      write_message(error, capacity, "pthread_create failed");
-      return TWINRAY_ERROR;
-    }
-    pthread_detach(thread);
-  }
+  if (start_detached(exit_later, error, capacity) != 0) return TWINRAY_ERROR;
 #endif
 #ifdef TWINRAY_HOSTILE_STDOUT_TO_SHM
   if (dup2(3, 1) == 1) {
@@ -214,14 +219,7 @@ static int hostile_build(void* self, const twinray_geometry* geometry, char* err
   }
 #endif
 #ifdef TWINRAY_HOSTILE_LATE_THREAD_CRASH
-  {
-    pthread_t thread;
-    if (pthread_create(&thread, NULL, crash_later, NULL) != 0) {
-      write_message(error, capacity, "pthread_create failed");
-      return TWINRAY_ERROR;
-    }
-    pthread_detach(thread);
-  }
+  if (start_detached(crash_later, error, capacity) != 0) return TWINRAY_ERROR;
 #endif
 #ifdef TWINRAY_HOSTILE_BUILD_LOOP
   {
