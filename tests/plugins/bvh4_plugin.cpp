@@ -33,6 +33,8 @@
 //                         last slot instead of appending: a grandchild is lost
 //   6 ANYHIT_LEAF_BOX     occluded returns 1 as soon as the ray enters a leaf's box
 //   7 TIE_T_ONLY          equal t keeps the first hit found (t compared alone, the ids never)
+//   8 PRUNE_NO_SLACK      nodes pruned against the best t itself (kTieSlack 0): a flat leaf entered at the
+//                         float t of a copy found first, rounded a few ulps later by the slab, is skipped
 
 #include "twinray_plugin.h"
 
@@ -71,7 +73,11 @@ constexpr std::size_t kParallelMin = 16384;
 // the triangle test's t of a triangle in that plane round differently (a few ulps), and a tie among copies in
 // two flat leaves must still reach the leaf holding the lowest id. 2^-18 is 64 float ulps: it only costs
 // visiting a few boxes that end at the hit.
+#if BUG(8)
+constexpr float kTieSlack = 0.0f;  // "a box entered after the best hit cannot hold a closer one"
+#else
 constexpr float kTieSlack = 0x1p-18f;
+#endif
 
 struct Vec3 {
   float x, y, z;
