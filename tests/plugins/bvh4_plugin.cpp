@@ -15,8 +15,8 @@
 //    Transformation"), in float, with the per-triangle affine map to the unit triangle precomputed (in double,
 //    stored as float); not watertight, so it does not claim it;
 //  - spheres: the closest-approach form in float (Haines et al., Ray Tracing Gems, ch. 7);
-//  - claims TWINRAY_PLUGIN_COUNTS_TRAVERSAL (one node per 4-wide node whose boxes were tested, one primitive
-//    per test) and TWINRAY_PLUGIN_HONOURS_TIES: equal computed float t goes to the lower (geom_id, prim_id).
+//  - claims TWINRAY_PLUGIN_COUNTS_TRAVERSAL (every child box the SIMD test tests counts as a node visited, as
+//    the ABI words it and as twinray's binary `bvh` counts, not one per 4-wide node; one primitive per test) and TWINRAY_PLUGIN_HONOURS_TIES: equal computed float t goes to the lower (geom_id, prim_id).
 //    Copies of one triangle (same vertices, same order) get the same map, so bit-identical t; a node is
 //    pruned only when its entry lies beyond the best t by more than kTieSlack, because a box entered exactly
 //    at a hit (a flat, axis-aligned leaf) computes that t with other roundings than the triangle test;
@@ -84,7 +84,6 @@ struct Vec3 {
 };
 inline Vec3 sub(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline float get(Vec3 v, int axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
 
 struct Box {
@@ -141,6 +140,7 @@ inline std::uint32_t leaf_ref(std::uint32_t start, std::uint32_t count) {
 struct alignas(16) Node4 {
   float bounds[6][4];
   std::uint32_t child[4];
+  std::uint32_t children;  // slots in use (2 to 4): the boxes one visit tests
 };
 
 struct Ray {
@@ -418,6 +418,7 @@ std::uint32_t Bvh4::collapse(const BinNode& n) {
   }
   const std::uint32_t index = static_cast<std::uint32_t>(nodes_.size());
   nodes_.emplace_back();
+  nodes_[index].children = static_cast<std::uint32_t>(count);
   sah_ += relative_area(n.box);
   for (int i = 0; i < 4; ++i) {
     Node4& node = nodes_[index];
@@ -580,8 +581,8 @@ bool Bvh4::intersect(const Ray& ray, Hit& hit, twinray_query_stats& stats) const
       leaf_closest(e.ref, ray, hit, stats);
       continue;
     }
-    ++stats.nodes_visited;
     const Node4& node = nodes_[e.ref];
+    stats.nodes_visited += node.children;
     __m128 tn, tf;
     const float bound = std::min(ray.tmax, hit.t + hit.t * kTieSlack);
     int mask = slab(node, ray, bound, tn, tf);
@@ -628,8 +629,8 @@ bool Bvh4::occluded(const Ray& ray, twinray_query_stats& stats) const {
       if (leaf_any(ref, ray, stats)) return true;
       continue;
     }
-    ++stats.nodes_visited;
     const Node4& node = nodes_[ref];
+    stats.nodes_visited += node.children;
     __m128 tn, tf;
     int mask = slab(node, ray, ray.tmax, tn, tf);
     while (mask) {
