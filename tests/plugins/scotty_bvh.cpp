@@ -736,6 +736,7 @@ class BVH {
   // The tree, built by the first query that needs it (no lock: "it happens once").
   void ensure_built() const {
     if (built_) return;
+    lazy_arrivals_.fetch_add(1);  // the test's widening of the race window (lazy_build_pause)
     const_cast<BVH*>(this)->build_tree();
     built_ = true;
   }
@@ -1168,8 +1169,41 @@ class BVH {
 #endif
     n.size = size;
     nodes_.push_back(n);
+#if BUG(54)
+    lazy_build_pause();
+#endif
     return nodes_.size() - 1;
   }
+
+#if BUG(54)
+  // Test-only widening of the race window (not part of the bug as a student writes it). Two builders that
+  // run one after the other build the same tree into the same slots (a deterministic build; std::partition of
+  // a range already partitioned moves nothing), so the unlocked lazy build does harm only when a second
+  // builder's nodes_.clear() lands while the first is part-way through its nodes and their pushes then
+  // interleave: on a loaded machine, or a scene whose build takes a millisecond, that was left to the
+  // scheduler, and GradePlugins.LazyBuildRacesInTheFirstConcurrentRound was flaky. Here every builder of the
+  // lazy build sleeps 200 us after each of its first 32 nodes (so two builders' pushes alternate, on one core
+  // or two), and the first builder, after its 8th node, waits (up to 2 s) until a second query has found the
+  // tree unbuilt too, whose clear() then reuses the first builder's slots. A query alone (the single-threaded
+  // round, `twinray trace`) waits 2 s once and builds a correct tree; the first concurrent round of the
+  // thread-safety check always tears it.
+  void lazy_build_pause() const {
+    if (built_) return;
+    thread_local std::size_t pushed = 0;
+    thread_local const void* instance = nullptr;
+    if (instance != this) {  // this thread's first node of this instance's lazy build
+      instance = this;
+      pushed = 0;
+    }
+    ++pushed;
+    if (pushed == 8 && lazy_arrivals_.load() < 2) {
+      const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+      while (lazy_arrivals_.load() < 2 && std::chrono::steady_clock::now() < until)
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+    }
+    if (pushed <= 32) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+#endif
 
   // Bucketed SAH over primitive centroids (the textbook's 12 buckets). Falls back to a split by count in the
   // middle when the centroids do not spread (identical boxes) or the tree gets deep, so it always ends.
@@ -1358,6 +1392,7 @@ class BVH {
 #endif
 #if BUG(54)
   mutable bool built_ = false;
+  mutable std::atomic<int> lazy_arrivals_{0};  // queries that found the tree unbuilt (lazy_build_pause)
 #endif
 #if BUG(81)
   mutable std::vector<std::uint32_t> mailbox_;  // the last ray id that tested each primitive
