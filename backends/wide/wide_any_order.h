@@ -30,7 +30,7 @@ struct AnyHitProbe {
 // tuned on the issue-12 scenes (the docs list every tree's ratio) to keep the Sponza interior's mesh (0.89),
 // whose own lamp-lit rays lose with nearest first, on the stored order.
 inline constexpr std::uint32_t kWideProbeSegments = 256;
-inline constexpr double kWideProbeMargin = 0.85;
+inline constexpr double kWideProbeMargin = 0.875;
 // A node box test is about 6 instructions (eight boxes in about 45), a triangle's share of a block test about 24.
 inline constexpr double kWideProbePrimitiveWeight = 4.0;
 

@@ -10,7 +10,8 @@
 // leaf children of a node are tested right away (a leaf test can end the query; a node can only lead to
 // one), then the inner children are visited in stored order, larger area first (SATO, see
 // wide_collapse.h), with no sorting at all; or, on trees where a build-time probe finds it clearly cheaper
-// (soups, the hairball: wide_any_order.h), the nearest hit inner child first and the others in stored order.
+// (soups, the hairball: wide_any_order.h), the nearest hit inner child first on segments (finite tmax) and the
+// others in stored order.
 //
 // Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes against
 // the same widened interval (cull_interval.h), so coplanar ties and hits at the ends of the interval are
@@ -266,6 +267,9 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
   // The widened box interval of cull_interval.h: a leaf whose only hit lies at the rounded tmin or tmax
   // must not be culled by the box test's own rounding.
   const float box_tmin = cull_min(ray.tmin), box_tmax = cull_max(ray.tmax);
+  // Nearest first only on segments (a finite tmax: shadow rays): on the trees that choose it, rays without an
+  // end visit as many nodes either way and would only pay for the search (docs/bvh-backend.md, tenth round).
+  [[maybe_unused]] const bool segment = kNearFirst && ray.tmax < std::numeric_limits<float>::infinity();
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = node_at(bvh.nodes, index);
@@ -290,10 +294,14 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
       // equals); push the others so the next lowest slot pops first.
       unsigned now = static_cast<unsigned>(__builtin_ctz(inner)), others = inner & (inner - 1);
       if constexpr (kNearFirst)
-        if (others != 0) {
+        if (others != 0 && segment) {
+          float best = entry[now];  // kept in a register: no reload of entry[now] per child
           for (unsigned m = others; m != 0; m &= m - 1) {
             const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
-            if (entry[s] < entry[now]) now = s;
+            const float e = entry[s];
+            const bool nearer = e < best;
+            now = nearer ? s : now;
+            best = nearer ? e : best;
           }
           others = inner & ~(1u << now);
         }
