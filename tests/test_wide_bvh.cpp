@@ -332,6 +332,33 @@ TEST(WideBvh, OptionsAreValidated) {
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
 }
 
+// The any-hit order (wide_any_order.h): probed per tree unless given; the choice follows the probe's costs.
+TEST(WideBvh, AnyHitOrderIsProbedUnlessGiven) {
+  const SceneGeometry g = random_triangle_soup(20000, 6);
+  WideBackend probed;
+  probed.build(g);
+  const AnyHitProbe& p = probed.any_hit_probe();
+  EXPECT_EQ(p.segments, kWideProbeSegments);
+  EXPECT_GT(p.stored_cost, 0.0);
+  EXPECT_GT(p.nearest_cost, 0.0);
+  EXPECT_EQ(p.chosen == AnyHitOrder::kNearest, p.nearest_cost < kWideProbeMargin * p.stored_cost);
+  // The same tree gives the same probe (a fixed sample) on every instruction set: the choice is reproducible.
+  for (const Isa isa : runnable_isas()) {
+    WideBackend again({}, isa);
+    again.build(g);
+    EXPECT_EQ(again.any_hit_probe().stored_cost, p.stored_cost) << to_string(isa);
+    EXPECT_EQ(again.any_hit_probe().nearest_cost, p.nearest_cost) << to_string(isa);
+  }
+  for (const AnyHitOrder order : {AnyHitOrder::kStored, AnyHitOrder::kNearest}) {
+    WideBuildOptions o;
+    o.any_hit_order = order;
+    WideBackend given(o);
+    given.build(g);
+    EXPECT_EQ(given.any_hit_probe().chosen, order);
+    EXPECT_EQ(given.any_hit_probe().segments, 0u);  // not probed
+  }
+}
+
 TEST(WideBvh, EmptySceneBuildsAndMisses) {
   WideBackend tree;
   tree.build(SceneGeometry{});

@@ -30,17 +30,22 @@ struct WideKernels {
   bool (*occluded)(WideView bvh, const Ray& ray, QueryStats* stats) = nullptr;
 };
 
+// Which hit inner child the any-hit traversal visits first at a node (the others are pushed in stored order):
+// the one stored first (larger weight, SATO: wide_collapse.h), or the one the ray enters first. Chosen per tree
+// at build time (WideBuildOptions::any_hit_order, docs/bvh-backend.md "Tenth round"); answers are the same.
+enum class AnyHitOrder { kStored, kNearest };
+
 // The kernels for scenes with the given primitive kinds (at least one) on `isa`.
-WideKernels wide_kernels(Isa isa, bool triangles, bool spheres);
+WideKernels wide_kernels(Isa isa, bool triangles, bool spheres, AnyHitOrder order = AnyHitOrder::kStored);
 
 namespace wide_sse2 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres, AnyHitOrder order);
 }
 namespace wide_avx2 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres, AnyHitOrder order);
 }
 namespace wide_avx512 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres, AnyHitOrder order);
 }
 
 }  // namespace twinray

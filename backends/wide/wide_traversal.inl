@@ -9,7 +9,9 @@
 // Any hit: the first hit ends the query, so the order is chosen to find one early and cheaply. The hit
 // leaf children of a node are tested right away (a leaf test can end the query; a node can only lead to
 // one), then the inner children are visited in stored order, larger area first (SATO, see
-// wide_collapse.h), with no sorting at all.
+// wide_collapse.h), with no sorting at all; or, on trees where a build-time probe finds it clearly cheaper
+// (soups, the hairball: wide_any_order.h), the nearest hit inner child first on segments (finite tmax) and the
+// others in stored order.
 //
 // Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes by the
 // same bounds of the near and far distances (ray_box.h's scales) against the ray's own interval, so coplanar
@@ -235,9 +237,11 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   return decide_in_double<Report::kAny>(ray, block, edges.exact_zero, tmin, tmax, unused) != 0;
 }
 
-// Any hit in one leaf. Counts the primitives it tests when kStats.
+// Any hit in one leaf. Counts the primitives it tests when kStats. Inlined into the timed (non-counting) copy
+// of the traversal, as GCC chose by itself while there was one such copy per primitive kind (with two any-hit
+// orders it stopped: +25 instructions per Sponza interior camera ray); called by the counting copy.
 template <bool kTriangles, bool kSpheres, bool kStats>
-TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool leaf_occluded_inline(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
@@ -266,8 +270,22 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
 }
 
 
-// Any hit; kStats as for intersect_impl.
+template <bool kTriangles, bool kSpheres>
+[[gnu::noinline]] TWINRAY_KERNEL bool leaf_occluded_counted(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
+                                                            const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
+  return leaf_occluded_inline<kTriangles, kSpheres, true>(prims, ref, ray, tri_ray, prims_tested);
+}
+
 template <bool kTriangles, bool kSpheres, bool kStats>
+[[gnu::always_inline]] TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref,
+                                                                const Ray& ray, const TriangleRay& tri_ray,
+                                                                std::uint64_t& prims_tested) {
+  if constexpr (kStats) return leaf_occluded_counted<kTriangles, kSpheres>(prims, ref, ray, tri_ray, prims_tested);
+  else return leaf_occluded_inline<kTriangles, kSpheres, false>(prims, ref, ray, tri_ray, prims_tested);
+}
+
+// Any hit; kStats as for intersect_impl; kNearFirst: the inner child to visit first (AnyHitOrder, wide_kernels.h).
+template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
@@ -282,6 +300,9 @@ template <bool kTriangles, bool kSpheres, bool kStats>
 
   // The ray's own interval: a leaf whose only hit lies at the rounded tmin or tmax is not culled by the box
   // test's own rounding, whose near and far distances are bounds of the exact ones (ray_box.h).
+  // Nearest first only on segments (a finite tmax: shadow rays): on the trees that choose it, rays without an
+  // end visit as many nodes either way and would only pay for the search (docs/bvh-backend.md, tenth round).
+  [[maybe_unused]] const bool segment = kNearFirst && ray.tmax < std::numeric_limits<float>::infinity();
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = node_at(bvh.nodes, index);
@@ -302,9 +323,23 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     if (found) break;
     const unsigned inner = mask & ~leaves;
     if (inner != 0) {
-      // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
-      index = node.child[__builtin_ctz(inner)];
-      size += push_children(node, inner & (inner - 1), stack + size);
+      // Visit the lowest slot (largest area) now, or with kNearFirst the nearest entry (the lowest slot among
+      // equals); push the others so the next lowest slot pops first.
+      unsigned now = static_cast<unsigned>(__builtin_ctz(inner)), others = inner & (inner - 1);
+      if constexpr (kNearFirst)
+        if (others != 0 && segment) {
+          float best = entry[now];  // kept in a register: no reload of entry[now] per child
+          for (unsigned m = others; m != 0; m &= m - 1) {
+            const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
+            const float e = entry[s];
+            const bool nearer = e < best;
+            now = nearer ? s : now;
+            best = nearer ? e : best;
+          }
+          others = inner & ~(1u << now);
+        }
+      index = node.child[now];
+      size += push_children(node, others, stack + size);
       continue;
     }
     if (size == 0) break;
@@ -331,18 +366,23 @@ TWINRAY_KERNEL bool wide_intersect(WideView bvh, const Ray& ray, Hit& hit, Query
   return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
-template <bool kTriangles, bool kSpheres>
+template <bool kTriangles, bool kSpheres, bool kNearFirst>
 TWINRAY_KERNEL bool wide_occluded(WideView bvh, const Ray& ray, QueryStats* stats) {
   if (!wide_ray_is_valid(ray)) return false;
-  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true>(bvh, ray, stats);
-  return wide_detail::occluded_impl<kTriangles, kSpheres, false>(bvh, ray, nullptr);
+  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true, kNearFirst>(bvh, ray, stats);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false, kNearFirst>(bvh, ray, nullptr);
 }
 
 // The entry points of this instruction set's kernels (wide_kernels.h).
-WideKernels kernels(bool triangles, bool spheres) {
-  if (triangles && spheres)
-    return {&wide_intersect<true, true, true>, &wide_intersect<true, true, false>, &wide_occluded<true, true>};
-  if (spheres)
-    return {&wide_intersect<false, true, true>, &wide_intersect<false, true, false>, &wide_occluded<false, true>};
-  return {&wide_intersect<true, false, true>, &wide_intersect<true, false, false>, &wide_occluded<true, false>};
+template <bool kTriangles, bool kSpheres>
+WideKernels kernels_for(AnyHitOrder order) {
+  return {&wide_intersect<kTriangles, kSpheres, true>, &wide_intersect<kTriangles, kSpheres, false>,
+          order == AnyHitOrder::kNearest ? &wide_occluded<kTriangles, kSpheres, true>
+                                         : &wide_occluded<kTriangles, kSpheres, false>};
+}
+
+WideKernels kernels(bool triangles, bool spheres, AnyHitOrder order) {
+  if (triangles && spheres) return kernels_for<true, true>(order);
+  if (spheres) return kernels_for<false, true>(order);
+  return kernels_for<true, false>(order);
 }
