@@ -1,42 +1,45 @@
 #pragma once
-// Chooses a built tree's any-hit order (AnyHitOrder, wide_kernels.h) by probing: a fixed sample of shadow-like
-// segments is traced with both any-hit kernels, counting the work, and the nearest-first order is taken only
-// when it is clearly cheaper.
+// Chooses a built tree's any-hit order (AnyHitOrder, wide_kernels.h) from the tree itself, without tracing:
+// the nearest-first order is taken when the leaves' depth complexity is high.
 //
-// Why per tree: neither order wins everywhere (docs/bvh-backend.md, "Tenth round"). In volumes of small
-// primitives (soups, the hairball) the child the ray enters first is the cheaper way to an occluder (soup-1M
-// shadow rays: 206 node boxes per ray stored-first, 123 nearest-first); in a building the larger child, a wall
-// or a floor, is (Sponza interior camera rays: 36 against 54). A segment of the probe joins the first hit of a
-// ray from outside the scene to a random point of the scene's padded box, like a shadow ray toward a light
-// somewhere in it. The answers are the same whichever order is chosen; only the work differs.
+// Why per tree: neither order wins everywhere (docs/bvh-backend.md, "Tenth round, scale series"). In volumes of
+// small primitives (soups, the hairball) the child the ray enters first is the cheaper way to an occluder
+// (soup-1M shadow rays: 206 node boxes per ray stored-first, 123 nearest-first); in a building the larger child,
+// a wall or a floor, is (Sponza interior camera rays: 36 against 54). The answers are the same whichever order is
+// chosen; only the work differs.
+//
+// The statistic: the leaves' depth complexity, the sum of the leaf boxes' surface areas over the root box's.
+// For a random line through the root box (uniform in the Cauchy-Crofton sense) the chance of crossing a convex
+// box inside it is the ratio of their surface areas, so the sum is the expected number of leaf boxes such a line
+// crosses. Where it is high, a segment that starts on a surface meets many leaves, each likely to hold an
+// occluder near the start, and visiting the nearest child first finds one after few nodes; where it is low (a
+// surface mesh: about 1 with the ground plane, whose box is most of the root's), the larger child stored first
+// is as likely a way to an occluder. One pass over the nodes, O(nodes): no probe, so no cost that grows with a
+// query's length (the tenth round's 256-segment probe took 15% of the hairball-256k build).
 
-#include "backends/bvh/primitive_store.h"
 #include "backends/wide/wide_kernels.h"
 #include "backends/wide/wide_node.h"
 
-#include <cstdint>
 #include <span>
 
 namespace twinray {
 
-struct AnyHitProbe {
-  // The work of each order on the probe: node boxes tested plus kWideProbePrimitiveWeight per primitive.
-  double stored_cost = 0.0, nearest_cost = 0.0;
-  std::uint32_t segments = 0;
+struct AnyHitOrderChoice {
+  double leaf_depth = 0.0;  // the leaves' depth complexity (above); 0 for an empty tree or a flat root box
   AnyHitOrder chosen = AnyHitOrder::kStored;
 };
 
-// Segments in the probe, and the share of the stored order's cost below which the nearest-first order is chosen:
-// tuned on the issue-12 scenes (the docs list every tree's ratio) to keep the Sponza interior's mesh (0.92),
-// whose own lamp-lit rays lose with nearest first, on the stored order.
-inline constexpr std::uint32_t kWideProbeSegments = 256;
-inline constexpr double kWideProbeMargin = 0.875;
-// A node box test is about 6 instructions (eight boxes in about 45), a triangle's share of a block test about 24.
-inline constexpr double kWideProbePrimitiveWeight = 4.0;
+// The depth complexity from which nearest first is taken. Measured on the issue-12 trees (docs/bvh-backend.md,
+// "Eleventh round, any-hit"): every mesh and view 0.8 to 2.3, except the Sponza interior (no ground plane) at
+// 7.6, whose own rays lose 14 to 48% of their node visits with nearest first; spheres 2.4 to 2.6, terrains 1.3
+// to 1.4; soups 12.6 to 30.4, the hairball 11.1 to 163. The threshold lies between the interior and the lowest
+// soup or hairball, about 1.2 times from either.
+inline constexpr double kWideNearestMinLeafDepth = 9.5;
 
-// `stored` and `nearest`: both orders' kernels for this tree's primitive kinds. Deterministic (a fixed generator),
-// and the same on every instruction set (the kernels count the same boxes and primitives).
-AnyHitProbe probe_any_hit_order(std::span<const WideNode> nodes, const PrimitiveStore& prims,
-                                const WideKernels& stored, const WideKernels& nearest);
+// The leaves' depth complexity of a tree (nodes[0] the root; empty slots have lo > hi), summed in double in
+// node order: the same value on every instruction set and run.
+double wide_leaf_depth_complexity(std::span<const WideNode> nodes);
+
+AnyHitOrderChoice choose_any_hit_order(std::span<const WideNode> nodes);
 
 }  // namespace twinray

@@ -61,13 +61,12 @@ void WideBackend::build(const SceneGeometry& geometry) {
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();
   kernels_ = WideKernels{};
-  any_hit_probe_ = AnyHitProbe{};
+  any_hit_order_ = AnyHitOrderChoice{};
   if (has_triangles || has_spheres) {
-    const WideKernels stored = wide_kernels(isa_, has_triangles, has_spheres, AnyHitOrder::kStored);
-    const WideKernels nearest = wide_kernels(isa_, has_triangles, has_spheres, AnyHitOrder::kNearest);
-    if (options_.any_hit_order) any_hit_probe_.chosen = *options_.any_hit_order;
-    else any_hit_probe_ = probe_any_hit_order(nodes_, prims_, stored, nearest);
-    kernels_ = any_hit_probe_.chosen == AnyHitOrder::kNearest ? nearest : stored;
+    // From the tree's leaf boxes (wide_any_order.h), unless given.
+    if (options_.any_hit_order) any_hit_order_.chosen = *options_.any_hit_order;
+    else any_hit_order_ = choose_any_hit_order(nodes_);
+    kernels_ = wide_kernels(isa_, has_triangles, has_spheres, any_hit_order_.chosen);
   }
 
   stats_ = BuildStats{};

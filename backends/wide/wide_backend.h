@@ -22,7 +22,7 @@ namespace twinray {
 struct WideBuildOptions {
   BvhBuildOptions binary = default_binary();
   WideCollapseOptions collapse;
-  // The any-hit order (wide_kernels.h); by default chosen per tree by probing it (wide_any_order.h).
+  // The any-hit order (wide_kernels.h); by default chosen per tree from its leaf boxes (wide_any_order.h).
   std::optional<AnyHitOrder> any_hit_order;
 
   // The binary tree the collapse starts from. Its leaves are the smallest the wide tree can have, so it
@@ -62,8 +62,8 @@ class WideBackend final : public Backend {
 
   // Read-only access to the tree, for tests and tools.
   Isa isa() const { return isa_; }
-  // The any-hit order the last build chose, with the probe's costs (zero when the order was given).
-  const AnyHitProbe& any_hit_probe() const { return any_hit_probe_; }
+  // The any-hit order the last build took, with the statistic it was chosen by (zero when the order was given).
+  const AnyHitOrderChoice& any_hit_order() const { return any_hit_order_; }
   std::span<const WideNode> nodes() const { return nodes_; }
   const PrimitiveStore& primitives() const { return prims_; }
 
@@ -75,7 +75,7 @@ class WideBackend final : public Backend {
   PrimitiveStore prims_;
   Bounds3 bounds_;       // of the whole scene, for the Morton order of batches
   BuildStats stats_;
-  AnyHitProbe any_hit_probe_;
+  AnyHitOrderChoice any_hit_order_;
 };
 
 std::unique_ptr<Backend> make_wide_backend(const WideBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);
