@@ -9,9 +9,8 @@
 // Any hit: the first hit ends the query, so the order is chosen to find one early and cheaply. The hit
 // leaf children of a node are tested right away (a leaf test can end the query; a node can only lead to
 // one), then the inner children are visited in stored order, larger area first (SATO, see
-// wide_collapse.h), with no sorting at all; or, on trees where a build-time probe finds it clearly cheaper
-// (soups, the hairball: wide_any_order.h), the nearest hit inner child first on segments (finite tmax) and the
-// others in stored order.
+// wide_collapse.h), with no sorting at all; or, on trees of high depth complexity (soups, the hairball:
+// wide_any_order.h), the nearest hit inner child first on segments (finite tmax) and the others in stored order.
 //
 // Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes by the
 // same bounds of the near and far distances (ray_box.h's scales) against the ray's own interval, so coplanar
@@ -237,11 +236,14 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   return decide_in_double<Report::kAny>(ray, block, edges.exact_zero, tmin, tmax, unused) != 0;
 }
 
-// Any hit in one leaf. Counts the primitives it tests when kStats. Inlined into the timed (non-counting) copy
-// of the traversal, as GCC chose by itself while there was one such copy per primitive kind (with two any-hit
-// orders it stopped: +25 instructions per Sponza interior camera ray); called by the counting copy.
-template <bool kTriangles, bool kSpheres, bool kStats>
-[[gnu::always_inline]] TWINRAY_KERNEL inline bool leaf_occluded_inline(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
+// Any hit in one leaf. Counts the primitives it tests when kStats. kCopy only makes one function per caller
+// (occluded_impl's kCopy): GCC inlines a function called once into its caller late, after both are optimised
+// on their own, which gives the timed traversal main's code; called from two traversals it inlined neither
+// (+25 instructions per Sponza interior camera ray, tenth round), and forced inline (always_inline, inlined
+// early) it gave code with the edge test's broadcasts hoisted into the query's set-up (+6 per dragon shadow
+// query: docs/bvh-backend.md, eleventh round).
+template <bool kTriangles, bool kSpheres, bool kStats, int kCopy>
+TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
@@ -269,23 +271,9 @@ template <bool kTriangles, bool kSpheres, bool kStats>
   return false;
 }
 
-
-template <bool kTriangles, bool kSpheres>
-[[gnu::noinline]] TWINRAY_KERNEL bool leaf_occluded_counted(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
-                                                            const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
-  return leaf_occluded_inline<kTriangles, kSpheres, true>(prims, ref, ray, tri_ray, prims_tested);
-}
-
-template <bool kTriangles, bool kSpheres, bool kStats>
-[[gnu::always_inline]] TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref,
-                                                                const Ray& ray, const TriangleRay& tri_ray,
-                                                                std::uint64_t& prims_tested) {
-  if constexpr (kStats) return leaf_occluded_counted<kTriangles, kSpheres>(prims, ref, ray, tri_ray, prims_tested);
-  else return leaf_occluded_inline<kTriangles, kSpheres, false>(prims, ref, ray, tri_ray, prims_tested);
-}
-
-// Any hit; kStats as for intersect_impl; kNearFirst: the inner child to visit first (AnyHitOrder, wide_kernels.h).
-template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
+// Any hit; kStats as for intersect_impl; kNearFirst: the inner child to visit first (AnyHitOrder, wide_kernels.h);
+// kCopy: which copy of the leaf test it calls (leaf_occluded).
+template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCopy>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
@@ -300,9 +288,6 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
 
   // The ray's own interval: a leaf whose only hit lies at the rounded tmin or tmax is not culled by the box
   // test's own rounding, whose near and far distances are bounds of the exact ones (ray_box.h).
-  // Nearest first only on segments (a finite tmax: shadow rays): on the trees that choose it, rays without an
-  // end visit as many nodes either way and would only pay for the search (docs/bvh-backend.md, tenth round).
-  [[maybe_unused]] const bool segment = kNearFirst && ray.tmax < std::numeric_limits<float>::infinity();
   std::uint32_t index = 0;  // a node: leaves never go on the stack
   for (;;) {
     const WideNode& node = node_at(bvh.nodes, index);
@@ -315,7 +300,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
     const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
-      if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
+      if (leaf_occluded<kTriangles, kSpheres, kStats, kCopy>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
         break;
       }
@@ -323,11 +308,15 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
     if (found) break;
     const unsigned inner = mask & ~leaves;
     if (inner != 0) {
-      // Visit the lowest slot (largest area) now, or with kNearFirst the nearest entry (the lowest slot among
-      // equals); push the others so the next lowest slot pops first.
-      unsigned now = static_cast<unsigned>(__builtin_ctz(inner)), others = inner & (inner - 1);
-      if constexpr (kNearFirst)
-        if (others != 0 && segment) {
+      if constexpr (!kNearFirst) {
+        // Visit the lowest slot (largest area) now; push the others so the next lowest pops first. (The slot
+        // straight from __builtin_ctz as main had it: through an unsigned variable GCC adds a zero extension.)
+        index = node.child[__builtin_ctz(inner)];
+        size += push_children(node, inner & (inner - 1), stack + size);
+      } else {
+        // The nearest entry (the lowest slot among equals) now; the others pushed as above.
+        unsigned now = static_cast<unsigned>(__builtin_ctz(inner)), others = inner & (inner - 1);
+        if (others != 0) {
           float best = entry[now];  // kept in a register: no reload of entry[now] per child
           for (unsigned m = others; m != 0; m &= m - 1) {
             const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
@@ -338,8 +327,9 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst>
           }
           others = inner & ~(1u << now);
         }
-      index = node.child[now];
-      size += push_children(node, others, stack + size);
+        index = node.child[now];
+        size += push_children(node, others, stack + size);
+      }
       continue;
     }
     if (size == 0) break;
@@ -366,23 +356,46 @@ TWINRAY_KERNEL bool wide_intersect(WideView bvh, const Ray& ray, Hit& hit, Query
   return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
-template <bool kTriangles, bool kSpheres, bool kNearFirst>
+#ifndef TWINRAY_WIDE_NEAREST_UNIT
+
+template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool wide_occluded(WideView bvh, const Ray& ray, QueryStats* stats) {
   if (!wide_ray_is_valid(ray)) return false;
-  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true, kNearFirst>(bvh, ray, stats);
-  return wide_detail::occluded_impl<kTriangles, kSpheres, false, kNearFirst>(bvh, ray, nullptr);
+  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true, false, 0>(bvh, ray, stats);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false, false, 0>(bvh, ray, nullptr);
 }
 
-// The entry points of this instruction set's kernels (wide_kernels.h).
+// The entry points of this instruction set's kernels (wide_kernels.h), the any-hit one in stored order.
+WideKernels kernels(bool triangles, bool spheres) {
+  if (triangles && spheres)
+    return {&wide_intersect<true, true, true>, &wide_intersect<true, true, false>, &wide_occluded<true, true>};
+  if (spheres)
+    return {&wide_intersect<false, true, true>, &wide_intersect<false, true, false>, &wide_occluded<false, true>};
+  return {&wide_intersect<true, false, true>, &wide_intersect<true, false, false>, &wide_occluded<true, false>};
+}
+
+#else  // the nearest-first any-hit kernels' own unit (wide_kernels_<isa>_nearest.cpp)
+
+// Any hit with the nearest hit inner child first on segments (a finite tmax: shadow rays). Rays without an end
+// take the stored order: on the trees that choose nearest first they visit as many nodes either way and would
+// only pay for the search (docs/bvh-backend.md, tenth round), so the choice is made once per query here, not
+// at every node. NaN tmax takes the stored path too, which the ray check rejects like any other kernel.
 template <bool kTriangles, bool kSpheres>
-WideKernels kernels_for(AnyHitOrder order) {
-  return {&wide_intersect<kTriangles, kSpheres, true>, &wide_intersect<kTriangles, kSpheres, false>,
-          order == AnyHitOrder::kNearest ? &wide_occluded<kTriangles, kSpheres, true>
-                                         : &wide_occluded<kTriangles, kSpheres, false>};
+TWINRAY_KERNEL bool wide_occluded_nearest(WideView bvh, const Ray& ray, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) return false;
+  const bool segment = ray.tmax < std::numeric_limits<float>::infinity();
+  if (stats != nullptr) {
+    if (segment) return wide_detail::occluded_impl<kTriangles, kSpheres, true, true, 1>(bvh, ray, stats);
+    return wide_detail::occluded_impl<kTriangles, kSpheres, true, false, 2>(bvh, ray, stats);
+  }
+  if (segment) return wide_detail::occluded_impl<kTriangles, kSpheres, false, true, 1>(bvh, ray, nullptr);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false, false, 2>(bvh, ray, nullptr);
 }
 
-WideKernels kernels(bool triangles, bool spheres, AnyHitOrder order) {
-  if (triangles && spheres) return kernels_for<true, true>(order);
-  if (spheres) return kernels_for<false, true>(order);
-  return kernels_for<true, false>(order);
+WideOccludedKernel nearest_occluded(bool triangles, bool spheres) {
+  if (triangles && spheres) return &wide_occluded_nearest<true, true>;
+  if (spheres) return &wide_occluded_nearest<false, true>;
+  return &wide_occluded_nearest<true, false>;
 }
+
+#endif
