@@ -361,11 +361,14 @@ TEST(WideBvh, LeafDepthComplexityIsTheLeafBoxesAreaOverTheRoots) {
   }
   nodes = {node_with_boxes({{o, one}}, /*inner=*/true), node_with_boxes(squares)};
   EXPECT_DOUBLE_EQ(wide_leaf_depth_complexity(nodes), 8.0 / 3.0);
-  // Scale-free: the same tree 2^40 times larger (float corners up to 2^40, the areas in double do not overflow).
-  for (WideNode& n : nodes)
-    for (int a = 0; a < 3; ++a)
-      for (int s = 0; s < kWideWidth; ++s) n.lo[a][s] *= 0x1p40f, n.hi[a][s] *= 0x1p40f;
-  EXPECT_DOUBLE_EQ(wide_leaf_depth_complexity(nodes), 8.0 / 3.0);
+  // Scale-free: the same tree 2^40 times larger (the float sums), and 2^100 times (their products overflow
+  // float, and the sum is redone in double).
+  for (const float scale : {0x1p40f, 0x1p60f}) {
+    for (WideNode& n : nodes)
+      for (int a = 0; a < 3; ++a)
+        for (int s = 0; s < kWideWidth; ++s) n.lo[a][s] *= scale, n.hi[a][s] *= scale;
+    EXPECT_DOUBLE_EQ(wide_leaf_depth_complexity(nodes), 8.0 / 3.0);
+  }
   // No tree, and a root box that is a line (zero area), give 0: the stored order.
   EXPECT_EQ(wide_leaf_depth_complexity({}), 0.0);
   nodes = {node_with_boxes({{o, glm::vec3(1, 0, 0)}, {o, glm::vec3(1, 0, 0)}})};
