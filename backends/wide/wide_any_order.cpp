@@ -1,5 +1,7 @@
 #include "backends/wide/wide_any_order.h"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -27,19 +29,28 @@ double wide_leaf_depth_complexity(std::span<const WideNode> nodes) {
   const double root = surface_area(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
   // No filled slot (-inf - inf), or a root box flat in two axes (a line: area 0): no meaningful ratio.
   if (!(root > 0.0) || !std::isfinite(root)) return 0.0;
-  // Each node's leaf areas summed in float, branch-free over its eight slots (an empty slot has hi - lo = -inf,
-  // so dx >= 0 is false, as is the leaf bit for an inner child): about a quarter of the instructions of a
-  // double per slot. Float's rounding (a relative 2^-21 over eight terms) does not matter to a threshold;
-  // a box past about 2^63 across overflows the float products, and the double sum below is then redone.
+  // Each node's leaf areas summed in float, four slots at a time (SSE2, which every x86-64 CPU has; this unit is
+  // compiled for the baseline, so the sum is the same on every machine): an empty slot has hi - lo = -inf, so
+  // dx >= 0 is false, and an inner child has the leaf bit clear. About 45 instructions per node instead of about
+  // 200 for a scalar loop in double. Float's rounding (a relative 2^-21 over eight terms) does not matter to a
+  // threshold; a box past about 2^63 across overflows the float products, and the sum is then redone in double.
+  static_assert(kWideWidth == 8, "two groups of four slots");
   double leaves = 0.0;
   for (const WideNode& node : nodes) {
-    float sum = 0.0f;
-    for (int s = 0; s < kWideWidth; ++s) {
-      const float dx = node.hi[0][s] - node.lo[0][s], dy = node.hi[1][s] - node.lo[1][s], dz = node.hi[2][s] - node.lo[2][s];
-      const float area = dx * dy + dy * dz + dz * dx;
-      sum += WideRef::is_leaf(node.child[s]) && dx >= 0.0f ? area : 0.0f;
+    __m128 sum = _mm_setzero_ps();
+    for (int h = 0; h < kWideWidth; h += 4) {
+      const __m128 dx = _mm_sub_ps(_mm_load_ps(&node.hi[0][h]), _mm_load_ps(&node.lo[0][h]));
+      const __m128 dy = _mm_sub_ps(_mm_load_ps(&node.hi[1][h]), _mm_load_ps(&node.lo[1][h]));
+      const __m128 dz = _mm_sub_ps(_mm_load_ps(&node.hi[2][h]), _mm_load_ps(&node.lo[2][h]));
+      const __m128 area = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx));
+      const __m128i child = _mm_load_si128(reinterpret_cast<const __m128i*>(&node.child[h]));
+      const __m128 leaf = _mm_castsi128_ps(_mm_srai_epi32(child, 31));  // all ones where the leaf bit is set
+      static_assert(WideRef::kLeafBit == 0x80000000u, "the leaf bit is the sign bit");
+      sum = _mm_add_ps(sum, _mm_and_ps(_mm_and_ps(leaf, _mm_cmpge_ps(dx, _mm_setzero_ps())), area));
     }
-    leaves += sum;
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, sum);
+    leaves += static_cast<double>((lanes[0] + lanes[1]) + (lanes[2] + lanes[3]));
   }
   if (!std::isfinite(leaves)) {
     leaves = 0.0;
