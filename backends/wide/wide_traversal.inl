@@ -19,7 +19,8 @@
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
 // headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes(),
 // leaf_children() and push_children() for its instruction set; it defines the namespace's kernels()
-// (wide_kernels.h).
+// (wide_kernels.h), or, compiled again by wide_kernels_<isa>_nearest.cpp with TWINRAY_WIDE_NEAREST_UNIT defined,
+// only nearest_occluded() (why in their own unit: wide_kernels_avx2_nearest.cpp).
 
 namespace wide_detail {
 
@@ -379,7 +380,7 @@ WideKernels kernels(bool triangles, bool spheres) {
 // Any hit with the nearest hit inner child first on segments (a finite tmax: shadow rays). Rays without an end
 // take the stored order: on the trees that choose nearest first they visit as many nodes either way and would
 // only pay for the search (docs/bvh-backend.md, tenth round), so the choice is made once per query here, not
-// at every node. NaN tmax takes the stored path too, which the ray check rejects like any other kernel.
+// at every node.
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool wide_occluded_nearest(WideView bvh, const Ray& ray, QueryStats* stats) {
   if (!wide_ray_is_valid(ray)) return false;
