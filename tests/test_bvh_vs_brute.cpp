@@ -91,6 +91,10 @@ std::vector<std::pair<std::string, std::unique_ptr<Backend>>> trees_on_every_isa
   for (const Isa isa : runnable_isas()) {
     trees.emplace_back("bvh/" + std::string(to_string(isa)), make_bvh_backend({}, isa));
     trees.emplace_back("bvh8/" + std::string(to_string(isa)), make_wide_backend({}, isa));
+    // The nearest-first any-hit order too, whichever order the build picks for the scene (wide_any_order.h).
+    WideBuildOptions nearest;
+    nearest.any_hit_order = AnyHitOrder::kNearest;
+    trees.emplace_back("bvh8/" + std::string(to_string(isa)) + "/nearest", make_wide_backend(nearest, isa));
   }
   return trees;
 }

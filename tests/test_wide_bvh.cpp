@@ -5,6 +5,7 @@
 #include "backends/bvh/bvh_builder.h"
 #include "backends/simd/isa.h"
 #include "backends/bvh/primitive_gather.h"
+#include "backends/wide/wide_any_order.h"
 #include "backends/wide/wide_backend.h"
 #include "backends/wide/wide_collapse.h"
 #include "core/scene/procedural.h"
@@ -330,6 +331,83 @@ TEST(WideBvh, OptionsAreValidated) {
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
   o.binary.max_leaf_size = 17;
   EXPECT_THROW(WideBackend{o}, std::invalid_argument);
+}
+
+// A node with the given boxes in its first slots, each a leaf (or, with `inner`, a reference to node 1).
+WideNode node_with_boxes(const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes, bool inner = false) {
+  WideNode node;
+  for (int s = 0; s < kWideWidth; ++s)
+    for (int a = 0; a < 3; ++a) node.lo[a][s] = INFINITY, node.hi[a][s] = -INFINITY;
+  std::fill(std::begin(node.child), std::end(node.child), 0u);
+  for (std::size_t s = 0; s < boxes.size(); ++s) {
+    for (int a = 0; a < 3; ++a) node.lo[a][s] = boxes[s].first[a], node.hi[a][s] = boxes[s].second[a];
+    node.child[s] = inner ? 1u : WideRef::leaf(static_cast<std::uint32_t>(4 * s), 1, false);
+  }
+  return node;
+}
+
+// The leaves' depth complexity (wide_any_order.h): the leaf boxes' surface areas over the root box's, inner boxes
+// not counted, empty slots skipped, and 0 where the ratio means nothing.
+TEST(WideBvh, LeafDepthComplexityIsTheLeafBoxesAreaOverTheRoots) {
+  const glm::vec3 o(0.0f), one(1.0f);
+  // Two unit cubes in a root of two: each leaf is the whole root box.
+  std::vector<WideNode> nodes = {node_with_boxes({{o, one}, {o, one}})};
+  EXPECT_EQ(wide_leaf_depth_complexity(nodes), 2.0);
+  // A root of one inner unit cube over eight flat unit squares (area 2 each, 1/3 of the cube's 6): 8 / 3.
+  std::vector<std::pair<glm::vec3, glm::vec3>> squares;
+  for (int k = 0; k < 8; ++k) {
+    const float z = 0.125f * static_cast<float>(k);
+    squares.push_back({glm::vec3(0, 0, z), glm::vec3(1, 1, z)});
+  }
+  nodes = {node_with_boxes({{o, one}}, /*inner=*/true), node_with_boxes(squares)};
+  EXPECT_DOUBLE_EQ(wide_leaf_depth_complexity(nodes), 8.0 / 3.0);
+  // Scale-free: the same tree 2^40 times larger (the float sums), and 2^100 times (their products overflow
+  // float, and the sum is redone in double).
+  for (const float scale : {0x1p40f, 0x1p60f}) {
+    for (WideNode& n : nodes)
+      for (int a = 0; a < 3; ++a)
+        for (int s = 0; s < kWideWidth; ++s) n.lo[a][s] *= scale, n.hi[a][s] *= scale;
+    EXPECT_DOUBLE_EQ(wide_leaf_depth_complexity(nodes), 8.0 / 3.0);
+  }
+  // No tree, and a root box that is a line (zero area), give 0: the stored order.
+  EXPECT_EQ(wide_leaf_depth_complexity({}), 0.0);
+  nodes = {node_with_boxes({{o, glm::vec3(1, 0, 0)}, {o, glm::vec3(1, 0, 0)}})};
+  EXPECT_EQ(wide_leaf_depth_complexity(nodes), 0.0);
+  EXPECT_EQ(choose_any_hit_order(nodes).chosen, AnyHitOrder::kStored);
+}
+
+// The any-hit order: chosen per tree from its leaf depth complexity unless given. A soup (a volume of small
+// triangles, many leaves along any line) takes nearest first; a surface (a tessellated sphere, a grid) keeps the
+// stored order. The value is the same on every instruction set (the tree is), so the choice is reproducible.
+TEST(WideBvh, AnyHitOrderFollowsTheLeafDepthUnlessGiven) {
+  const SceneGeometry soup = random_triangle_soup(20000, 6);
+  WideBackend chosen;
+  chosen.build(soup);
+  const AnyHitOrderChoice& c = chosen.any_hit_order();
+  EXPECT_EQ(c.leaf_depth, wide_leaf_depth_complexity(chosen.nodes()));
+  EXPECT_GE(c.leaf_depth, kWideNearestMinLeafDepth);
+  EXPECT_EQ(c.chosen, AnyHitOrder::kNearest);
+  for (const Isa isa : runnable_isas()) {
+    WideBackend again({}, isa);
+    again.build(soup);
+    EXPECT_EQ(again.any_hit_order().leaf_depth, c.leaf_depth) << to_string(isa);
+    EXPECT_EQ(again.any_hit_order().chosen, c.chosen) << to_string(isa);
+  }
+  for (const SceneGeometry& surface : {tessellated_sphere(glm::vec3(0.0f), 1.0f, 5), grid_mesh(100, 100)}) {
+    WideBackend tree;
+    tree.build(surface);
+    EXPECT_LT(tree.any_hit_order().leaf_depth, kWideNearestMinLeafDepth);
+    EXPECT_GT(tree.any_hit_order().leaf_depth, 0.0);
+    EXPECT_EQ(tree.any_hit_order().chosen, AnyHitOrder::kStored);
+  }
+  for (const AnyHitOrder order : {AnyHitOrder::kStored, AnyHitOrder::kNearest}) {
+    WideBuildOptions o;
+    o.any_hit_order = order;
+    WideBackend given(o);
+    given.build(soup);
+    EXPECT_EQ(given.any_hit_order().chosen, order);
+    EXPECT_EQ(given.any_hit_order().leaf_depth, 0.0);  // not computed
+  }
 }
 
 TEST(WideBvh, EmptySceneBuildsAndMisses) {

@@ -3,6 +3,7 @@
 #include "backends/bvh/bvh_builder.h"
 #include "backends/bvh/primitive_gather.h"
 #include "backends/bvh/ray_order.h"
+#include "backends/wide/wide_any_order.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -59,7 +60,14 @@ void WideBackend::build(const SceneGeometry& geometry) {
   bounds_ = binary.nodes.empty() ? Bounds3{} : Bounds3{binary.nodes[0].lo, binary.nodes[0].hi};
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();
-  kernels_ = has_triangles || has_spheres ? wide_kernels(isa_, has_triangles, has_spheres) : WideKernels{};
+  kernels_ = WideKernels{};
+  any_hit_order_ = AnyHitOrderChoice{};
+  if (has_triangles || has_spheres) {
+    // From the tree's leaf boxes (wide_any_order.h), unless given.
+    if (options_.any_hit_order) any_hit_order_.chosen = *options_.any_hit_order;
+    else any_hit_order_ = choose_any_hit_order(nodes_);
+    kernels_ = wide_kernels(isa_, has_triangles, has_spheres, any_hit_order_.chosen);
+  }
 
   stats_ = BuildStats{};
   stats_.triangles = n_triangles;

@@ -6,6 +6,7 @@
 #include "backends/bvh/bvh_build_options.h"
 #include "backends/bvh/primitive_store.h"
 #include "backends/simd/isa.h"
+#include "backends/wide/wide_any_order.h"
 #include "backends/wide/wide_collapse.h"
 #include "backends/wide/wide_kernels.h"
 #include "backends/wide/wide_node.h"
@@ -21,6 +22,8 @@ namespace twinray {
 struct WideBuildOptions {
   BvhBuildOptions binary = default_binary();
   WideCollapseOptions collapse;
+  // The any-hit order (wide_kernels.h); by default chosen per tree from its leaf boxes (wide_any_order.h).
+  std::optional<AnyHitOrder> any_hit_order;
 
   // The binary tree the collapse starts from. Its leaves are the smallest the wide tree can have, so it
   // is built with cheaper interior steps than the bvh backend's (1:1 instead of 3:1) and leaves of at most
@@ -59,6 +62,8 @@ class WideBackend final : public Backend {
 
   // Read-only access to the tree, for tests and tools.
   Isa isa() const { return isa_; }
+  // The any-hit order the last build took, with the statistic it was chosen by (zero when the order was given).
+  const AnyHitOrderChoice& any_hit_order() const { return any_hit_order_; }
   std::span<const WideNode> nodes() const { return nodes_; }
   const PrimitiveStore& primitives() const { return prims_; }
 
@@ -70,6 +75,7 @@ class WideBackend final : public Backend {
   PrimitiveStore prims_;
   Bounds3 bounds_;       // of the whole scene, for the Morton order of batches
   BuildStats stats_;
+  AnyHitOrderChoice any_hit_order_;
 };
 
 std::unique_ptr<Backend> make_wide_backend(const WideBuildOptions& options = {}, std::optional<Isa> isa = std::nullopt);

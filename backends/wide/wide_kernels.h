@@ -24,23 +24,32 @@ struct WideView {
 // left as a miss has them: Backend::intersect_ids) and any hit. Each checks its ray first (an invalid ray
 // misses: it must not sweep the tree), in the kernel's own instruction set, and takes the view by value (two
 // pointers in two registers): the backend's wrapper then only forwards its arguments.
+using WideOccludedKernel = bool (*)(WideView bvh, const Ray& ray, QueryStats* stats);
 struct WideKernels {
   bool (*intersect)(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
   bool (*intersect_ids)(WideView bvh, const Ray& ray, Hit& hit, QueryStats* stats) = nullptr;
-  bool (*occluded)(WideView bvh, const Ray& ray, QueryStats* stats) = nullptr;
+  WideOccludedKernel occluded = nullptr;
 };
 
+// Which hit inner child the any-hit traversal visits first at a node (the others are pushed in stored order):
+// the one stored first (larger weight, SATO: wide_collapse.h), or the one the ray enters first. Chosen per tree
+// at build time (WideBuildOptions::any_hit_order, wide_any_order.h); answers are the same.
+enum class AnyHitOrder { kStored, kNearest };
+
 // The kernels for scenes with the given primitive kinds (at least one) on `isa`.
-WideKernels wide_kernels(Isa isa, bool triangles, bool spheres);
+WideKernels wide_kernels(Isa isa, bool triangles, bool spheres, AnyHitOrder order = AnyHitOrder::kStored);
 
 namespace wide_sse2 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres);  // any hit in stored order
+WideOccludedKernel nearest_occluded(bool triangles, bool spheres);  // wide_kernels_sse2_nearest.cpp
 }
 namespace wide_avx2 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres);  // any hit in stored order
+WideOccludedKernel nearest_occluded(bool triangles, bool spheres);  // wide_kernels_avx2_nearest.cpp
 }
 namespace wide_avx512 {
-WideKernels kernels(bool triangles, bool spheres);
+WideKernels kernels(bool triangles, bool spheres);  // any hit in stored order
+WideOccludedKernel nearest_occluded(bool triangles, bool spheres);  // wide_kernels_avx512_nearest.cpp
 }
 
 }  // namespace twinray

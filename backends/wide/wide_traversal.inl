@@ -9,7 +9,8 @@
 // Any hit: the first hit ends the query, so the order is chosen to find one early and cheaply. The hit
 // leaf children of a node are tested right away (a leaf test can end the query; a node can only lead to
 // one), then the inner children are visited in stored order, larger area first (SATO, see
-// wide_collapse.h), with no sorting at all.
+// wide_collapse.h), with no sorting at all; or, on trees of high depth complexity (soups, the hairball:
+// wide_any_order.h), the nearest hit inner child first on segments (finite tmax) and the others in stored order.
 //
 // Leaves are tested by the same watertight block test as the binary bvh (triangle_block.h), and boxes by the
 // same bounds of the near and far distances (ray_box.h's scales) against the ray's own interval, so coplanar
@@ -18,7 +19,8 @@
 // No include guard: wide_kernels_<isa>.cpp includes this file once, inside its own namespace, after the
 // headers it needs and after defining TWINRAY_KERNEL (the target attribute), WideBoxRay, test_boxes(),
 // leaf_children() and push_children() for its instruction set; it defines the namespace's kernels()
-// (wide_kernels.h).
+// (wide_kernels.h), or, compiled again by wide_kernels_<isa>_nearest.cpp with TWINRAY_WIDE_NEAREST_UNIT defined,
+// only nearest_occluded() (why in their own unit: wide_kernels_avx2_nearest.cpp).
 
 namespace wide_detail {
 
@@ -235,8 +237,13 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
   return decide_in_double<Report::kAny>(ray, block, edges.exact_zero, tmin, tmax, unused) != 0;
 }
 
-// Any hit in one leaf. Counts the primitives it tests when kStats.
-template <bool kTriangles, bool kSpheres, bool kStats>
+// Any hit in one leaf. Counts the primitives it tests when kStats. kCopy only makes one function per caller
+// (occluded_impl's kCopy): GCC inlines a function called once into its caller late, after both are optimised
+// on their own, which gives the timed traversal main's code; called from two traversals it inlined neither
+// (+25 instructions per Sponza interior camera ray, tenth round), and forced inline (always_inline, inlined
+// early) it gave code with the edge test's broadcasts hoisted into the query's set-up (+6 per dragon shadow
+// query: docs/bvh-backend.md, eleventh round).
+template <bool kTriangles, bool kSpheres, bool kStats, int kCopy>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
   const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
@@ -265,9 +272,9 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
   return false;
 }
 
-
-// Any hit; kStats as for intersect_impl.
-template <bool kTriangles, bool kSpheres, bool kStats>
+// Any hit; kStats as for intersect_impl; kNearFirst: the inner child to visit first (AnyHitOrder, wide_kernels.h);
+// kCopy: which copy of the leaf test it calls (leaf_occluded).
+template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCopy>
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
@@ -294,7 +301,7 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
-      if (leaf_occluded<kTriangles, kSpheres, kStats>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
+      if (leaf_occluded<kTriangles, kSpheres, kStats, kCopy>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
         found = true;
         break;
       }
@@ -302,9 +309,28 @@ template <bool kTriangles, bool kSpheres, bool kStats>
     if (found) break;
     const unsigned inner = mask & ~leaves;
     if (inner != 0) {
-      // Visit the lowest slot (largest area) now; push the others so the next lowest pops first.
-      index = node.child[__builtin_ctz(inner)];
-      size += push_children(node, inner & (inner - 1), stack + size);
+      if constexpr (!kNearFirst) {
+        // Visit the lowest slot (largest area) now; push the others so the next lowest pops first. (The slot
+        // straight from __builtin_ctz as main had it: through an unsigned variable GCC adds a zero extension.)
+        index = node.child[__builtin_ctz(inner)];
+        size += push_children(node, inner & (inner - 1), stack + size);
+      } else {
+        // The nearest entry (the lowest slot among equals) now; the others pushed as above.
+        unsigned now = static_cast<unsigned>(__builtin_ctz(inner)), others = inner & (inner - 1);
+        if (others != 0) {
+          float best = entry[now];  // kept in a register: no reload of entry[now] per child
+          for (unsigned m = others; m != 0; m &= m - 1) {
+            const unsigned s = static_cast<unsigned>(__builtin_ctz(m));
+            const float e = entry[s];
+            const bool nearer = e < best;
+            now = nearer ? s : now;
+            best = nearer ? e : best;
+          }
+          others = inner & ~(1u << now);
+        }
+        index = node.child[now];
+        size += push_children(node, others, stack + size);
+      }
       continue;
     }
     if (size == 0) break;
@@ -331,14 +357,16 @@ TWINRAY_KERNEL bool wide_intersect(WideView bvh, const Ray& ray, Hit& hit, Query
   return wide_detail::intersect_impl<kTriangles, kSpheres, false, kAttributes>(bvh, ray, hit, nullptr);
 }
 
+#ifndef TWINRAY_WIDE_NEAREST_UNIT
+
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool wide_occluded(WideView bvh, const Ray& ray, QueryStats* stats) {
   if (!wide_ray_is_valid(ray)) return false;
-  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true>(bvh, ray, stats);
-  return wide_detail::occluded_impl<kTriangles, kSpheres, false>(bvh, ray, nullptr);
+  if (stats != nullptr) return wide_detail::occluded_impl<kTriangles, kSpheres, true, false, 0>(bvh, ray, stats);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false, false, 0>(bvh, ray, nullptr);
 }
 
-// The entry points of this instruction set's kernels (wide_kernels.h).
+// The entry points of this instruction set's kernels (wide_kernels.h), the any-hit one in stored order.
 WideKernels kernels(bool triangles, bool spheres) {
   if (triangles && spheres)
     return {&wide_intersect<true, true, true>, &wide_intersect<true, true, false>, &wide_occluded<true, true>};
@@ -346,3 +374,29 @@ WideKernels kernels(bool triangles, bool spheres) {
     return {&wide_intersect<false, true, true>, &wide_intersect<false, true, false>, &wide_occluded<false, true>};
   return {&wide_intersect<true, false, true>, &wide_intersect<true, false, false>, &wide_occluded<true, false>};
 }
+
+#else  // the nearest-first any-hit kernels' own unit (wide_kernels_<isa>_nearest.cpp)
+
+// Any hit with the nearest hit inner child first on segments (a finite tmax: shadow rays). Rays without an end
+// take the stored order: on the trees that choose nearest first they visit as many nodes either way and would
+// only pay for the search (docs/bvh-backend.md, tenth round), so the choice is made once per query here, not
+// at every node.
+template <bool kTriangles, bool kSpheres>
+TWINRAY_KERNEL bool wide_occluded_nearest(WideView bvh, const Ray& ray, QueryStats* stats) {
+  if (!wide_ray_is_valid(ray)) return false;
+  const bool segment = ray.tmax < std::numeric_limits<float>::infinity();
+  if (stats != nullptr) {
+    if (segment) return wide_detail::occluded_impl<kTriangles, kSpheres, true, true, 1>(bvh, ray, stats);
+    return wide_detail::occluded_impl<kTriangles, kSpheres, true, false, 2>(bvh, ray, stats);
+  }
+  if (segment) return wide_detail::occluded_impl<kTriangles, kSpheres, false, true, 1>(bvh, ray, nullptr);
+  return wide_detail::occluded_impl<kTriangles, kSpheres, false, false, 2>(bvh, ray, nullptr);
+}
+
+WideOccludedKernel nearest_occluded(bool triangles, bool spheres) {
+  if (triangles && spheres) return &wide_occluded_nearest<true, true>;
+  if (spheres) return &wide_occluded_nearest<false, true>;
+  return &wide_occluded_nearest<true, false>;
+}
+
+#endif
