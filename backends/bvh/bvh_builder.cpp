@@ -2,6 +2,7 @@
 
 #include "backends/bvh/bvh_binning.h"
 #include "backends/bvh/bvh_builder_memory.h"
+#include "backends/bvh/bvh_swept_subtree.h"
 
 #include "backends/bvh/primitive_store.h"
 #include "backends/simd/isa.h"
@@ -167,6 +168,13 @@ class Builder {
     if (n == 1) {  // what choose_split() decides for one primitive, without its conversions
       node.count = 1u | (info.second_kind == 1 ? BvhNode::kSphereLeafBit : 0u);
       return 1;
+    }
+    // Small subtrees of one kind sweep their sorted centroids instead of binning each node
+    // (bvh_swept_subtree.h); a range with a non-finite coordinate comes back (0) and is binned.
+    if (n <= kSweptMax && info.second_kind == 0 && o_.split_method == BvhSplitMethod::BinnedSah &&
+        depth + kSweptMax < kMedianOnlyDepth) {
+      const std::size_t count = build_swept_subtree(home_, begin, end, nodes_, at, o_, avx2_);
+      if (count != 0) return count;
     }
 
     BinMapping map{};
