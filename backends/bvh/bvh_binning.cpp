@@ -50,29 +50,39 @@ TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> ref
                                         const BinMapping& map, std::uint32_t second_kind_begin) {
   const int bins = map.bins;
   // Bins as flat arrays of 3 x kMaxBins: axis a's bin k is entry a kMaxBins + k, so that one vector addition
-  // gives the three entries a primitive updates. Written back to the grid at the end.
+  // gives the three entries a primitive updates, and one shift their byte offsets: the counts are kept at
+  // the boxes' 32-byte stride (Counts), so the same offset addresses a bin's box and its counts and no
+  // per-axis index arithmetic is left. Written back to the grid at the end.
+  struct Counts {
+    std::uint32_t count, second;
+    std::uint32_t unused[6];
+  };
+  static_assert(sizeof(Counts) == sizeof(__m256), "one byte offset for a bin's box and counts");
   __m256 box[3 * kMaxBins];
-  std::uint32_t count[3 * kMaxBins], second_count[3 * kMaxBins];
+  Counts counts[3 * kMaxBins];
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   for (int a = 0; a < 3; ++a)
     for (int k = 0; k < bins; ++k) {
       box[a * kMaxBins + k] = empty;
-      count[a * kMaxBins + k] = 0;
-      second_count[a * kMaxBins + k] = 0;
+      counts[a * kMaxBins + k].count = 0;
+      counts[a * kMaxBins + k].second = 0;
     }
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m128i axis_base = _mm_setr_epi32(0, kMaxBins, 2 * kMaxBins, 0);
-  alignas(16) std::uint32_t entry[4];
   for (std::size_t i = b; i < e; ++i) {
     const PrimRef& r = refs[i];
-    _mm_store_si128(reinterpret_cast<__m128i*>(entry), _mm_add_epi32(map.bins_of(r.lo4(), r.hi4()), axis_base));
+    const __m128i offset = _mm_slli_epi32(_mm_add_epi32(map.bins_of(r.lo4(), r.hi4()), axis_base), 5);  // x 32 bytes
     const __m256 row = _mm256_xor_ps(_mm256_load_ps(&r.lo.x), negate_hi);
     const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    const std::size_t at[3] = {static_cast<std::uint32_t>(_mm_cvtsi128_si32(offset)),
+                               static_cast<std::uint32_t>(_mm_extract_epi32(offset, 1)),
+                               static_cast<std::uint32_t>(_mm_extract_epi32(offset, 2))};
     for (int axis = 0; axis < 3; ++axis) {
-      __m256& bin = box[entry[axis]];
+      __m256& bin = *reinterpret_cast<__m256*>(reinterpret_cast<char*>(box) + at[axis]);
       bin = _mm256_min_ps(row, bin);  // operand order of extend_lo / extend_hi
-      ++count[entry[axis]];
-      if constexpr (kSecond) second_count[entry[axis]] += second;
+      Counts& c = *reinterpret_cast<Counts*>(reinterpret_cast<char*>(counts) + at[axis]);
+      ++c.count;
+      if constexpr (kSecond) c.second += second;
     }
   }
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -81,8 +91,8 @@ TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> ref
       const __m256 row = box[a * kMaxBins + k2];
       g.lo[a][k2] = _mm256_castps256_ps128(row);
       g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(row, 1), sign);
-      g.count[a][k2] = count[a * kMaxBins + k2];
-      g.second_kind[a][k2] = second_count[a * kMaxBins + k2];
+      g.count[a][k2] = counts[a * kMaxBins + k2].count;
+      g.second_kind[a][k2] = counts[a * kMaxBins + k2].second;
     }
   g.mark_used(bins);
 }
@@ -181,9 +191,14 @@ __attribute__((always_inline)) inline std::size_t partition_in_place(PrimRef* re
 // 8-lane row (lo, -hi), as in bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is
 // -min(-a, -b) bit for bit, in the operand order of extend_lo / extend_hi). The same classification and the
 // same folds in the same order as partition_in_place, so the same primitive order and the same bits.
-TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map,
+// kSecond: the range may hold primitives of the second kind (otherwise their count is 0 without a test).
+// The mapping is copied into locals and a swap moves each reference as one 32-byte row: the stores into
+// `refs` could alias `map` and forced a reload of its rows per primitive, and std::swap went through the stack.
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& mapping,
                                                         int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
                                                         RangeInfo& right) {
+  const BinMapping map = mapping;
   const __m128i planes = _mm_set1_epi32(plane);
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
@@ -201,7 +216,7 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     side.box = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), side.box);
     side.centroids = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), side.centroids);
-    side.second += p.id >= second_kind_begin ? 1u : 0u;
+    if constexpr (kSecond) side.second += p.id >= second_kind_begin ? 1u : 0u;
   };
   PrimRef* lo = refs + begin;
   PrimRef* hi = refs + end;
@@ -210,7 +225,10 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
     while (lo < hi && !goes_left(hi[-1])) add(r, *--hi);
     if (lo == hi) break;
     // *lo belongs right and hi[-1] left.
-    std::swap(*lo, *--hi);
+    --hi;
+    const __m256 a = _mm256_load_ps(&lo->lo.x), b = _mm256_load_ps(&hi->lo.x);
+    _mm256_store_ps(&lo->lo.x, b);
+    _mm256_store_ps(&hi->lo.x, a);
     add(l, *lo++);
     add(r, *hi);
   }
@@ -286,8 +304,12 @@ void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t 
 }
 
 std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
-                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2) {
-  if (avx2) return partition_in_place_avx2(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+                                  std::uint32_t second_kind_begin, bool second_kind_present, RangeInfo& left, RangeInfo& right,
+                                  bool avx2) {
+  if (avx2) {
+    if (second_kind_present) return partition_in_place_avx2<true>(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+    return partition_in_place_avx2<false>(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+  }
   return partition_in_place(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
 }
 

@@ -130,7 +130,7 @@ class Builder {
     RangeInfo left_info, right_info;
     bool children_in_scratch = in_scratch;
     const std::size_t mid =
-        partition(refs, begin, end, map, split, left_info, right_info, children_in_scratch, chunk_counts);
+        partition(refs, begin, end, map, split, info.second_kind != 0, left_info, right_info, children_in_scratch, chunk_counts);
     const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
     nodes_[at] = BvhNode{box.lo, static_cast<std::uint32_t>(right_at), box.hi, 0};
     std::size_t count = 1;
@@ -185,7 +185,7 @@ class Builder {
     }
     RangeInfo left_info, right_info;
     bool in_scratch = false;  // small ranges stay in place
-    const std::size_t mid = partition(home_, begin, end, map, split, left_info, right_info, in_scratch, {});
+    const std::size_t mid = partition(home_, begin, end, map, split, info.second_kind != 0, left_info, right_info, in_scratch, {});
 
     if (o_.parallel && n >= kParallelGrain) {
       const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
@@ -331,7 +331,8 @@ class Builder {
   // the binning's `chunk_counts`), small ones in place; the choice depends on the size only, so serial and
   // parallel builds stay identical.
   std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, const Split& split,
-                        RangeInfo& left, RangeInfo& right, bool& in_scratch, std::span<const ChunkCounts> chunk_counts) const {
+                        bool second_kind_present, RangeInfo& left, RangeInfo& right, bool& in_scratch,
+                        std::span<const ChunkCounts> chunk_counts) const {
     PrimRef* first = refs + begin;
     PrimRef* last = refs + end;
     std::size_t mid = end;
@@ -345,7 +346,8 @@ class Builder {
           in_scratch = !in_scratch;
           return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, left, right);
         }
-        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, left, right, avx2_);
+        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, second_kind_present, left, right,
+                                     avx2_);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
