@@ -4,6 +4,7 @@
 
 #include <immintrin.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -11,22 +12,20 @@ namespace twinray::bvh_binning {
 
 namespace {
 
-// A primitive's box as (lo, -hi), so that one min folds both ends and `lo + nhi` is minus the extent, whose
-// pairwise products are the extent's (half_area_of_negated). Fourth lanes 0.
+// A primitive: its box as (lo, -hi), so that one min folds both ends and `lo + nhi` is minus the extent,
+// whose pairwise products are the extent's (half_area_of), and its centroid. The fourth lane of `lo` holds
+// the id as PrimRef::lo does (folds and areas never read it), the other fourth lanes are 0.
 struct Row {
-  __m128 lo, nhi;
+  __m128 lo, nhi, c;
 };
-static_assert(sizeof(Row) == 32, "list entries are byte offsets of 32-byte rows");
 
-// One swept subtree: its primitives (local index i in the order of refs[begin, end)), their rows and
-// centroids, and per axis the rows in (centroid, local index) order as byte offsets (32 i) into `rows`, in
+// One swept subtree: its primitives (local index i in the order of refs[begin, end)) and per axis their
+// rows in (centroid, local index) order as byte offsets (i sizeof(Row)) into `rows`, in
 // two buffers: a node owns the same positions [lb, le) of the three lists, each in the buffer its bit of
 // Pending::buffers names; a split leaves the split axis's list where it is (already partitioned) and
 // partitions the other two stably into their other buffer.
 struct Swept {
-  PrimRef prims[kSweptMax];
   Row rows[kSweptMax];
-  __m128 c[kSweptMax];  // centroids (Bounds3::center()), fourth lane 0
   std::uint16_t list[2][3][kSweptMax];
   float tests[kSweptMax + 1];  // leaf_tests(k, 0)
   BvhNode* nodes;
@@ -41,6 +40,11 @@ __attribute__((always_inline)) inline const Row& row_at(const Swept& s, std::uin
   return *reinterpret_cast<const Row*>(reinterpret_cast<const char*>(s.rows) + offset);
 }
 
+// The centroid coordinate on axis a of the row at `offset`.
+__attribute__((always_inline)) inline float centroid_at(const Swept& s, std::uint16_t offset, int a) {
+  return *reinterpret_cast<const float*>(reinterpret_cast<const char*>(s.rows) + offset + offsetof(Row, c) + sizeof(float) * a);
+}
+
 // (e.x e.y + e.y e.z) + e.z e.x of e = lo + nhi = -(hi - lo): Bounds3::half_area()'s operations, and each
 // product of two negated factors is the product of the factors.
 __attribute__((always_inline)) inline float half_area_of(__m128 lo, __m128 nhi) {
@@ -48,12 +52,6 @@ __attribute__((always_inline)) inline float half_area_of(__m128 lo, __m128 nhi) 
   const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1)));  // x y, y z, z x
   return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 1))),
                                   _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 2, 1, 2))));
-}
-
-__attribute__((always_inline)) inline float lane(__m128 v, int a) {
-  alignas(16) float f[4];
-  _mm_store_ps(f, v);
-  return f[a];
 }
 
 __attribute__((always_inline)) inline bool load(Swept& s, const PrimRef* refs, std::size_t n) {
@@ -64,16 +62,13 @@ __attribute__((always_inline)) inline bool load(Swept& s, const PrimRef* refs, s
   __m128 finite = _mm_castsi128_ps(_mm_set1_epi32(-1));
   for (std::size_t i = 0; i < n; ++i) {
     const __m128 raw_lo = refs[i].lo4(), hi = refs[i].hi4();
-    _mm_store_ps(&s.prims[i].lo.x, raw_lo);
-    _mm_store_ps(&s.prims[i].hi.x, hi);
     const __m128 lo = _mm_and_ps(raw_lo, xyz);
-    const __m128 centroid = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi));  // as RangeInfo::add
-    s.rows[i] = {lo, _mm_and_ps(_mm_xor_ps(hi, sign), xyz)};
+    const __m128 centroid = _mm_and_ps(_mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(lo, hi)), xyz);  // as RangeInfo::add
+    s.rows[i] = {raw_lo, _mm_and_ps(_mm_xor_ps(hi, sign), xyz), centroid};
     // NaN and infinities fail `|x| < inf`; the fourth lanes are not looked at.
     finite = _mm_and_ps(finite, _mm_cmplt_ps(_mm_and_ps(lo, abs_mask), inf));
     finite = _mm_and_ps(finite, _mm_cmplt_ps(_mm_and_ps(hi, abs_mask), inf));
     finite = _mm_and_ps(finite, _mm_cmplt_ps(_mm_and_ps(centroid, abs_mask), inf));
-    s.c[i] = _mm_and_ps(centroid, xyz);
   }
   return (_mm_movemask_ps(finite) & 7) == 7;
 }
@@ -83,10 +78,10 @@ __attribute__((always_inline)) inline bool load(Swept& s, const PrimRef* refs, s
 // is finite, so <= is < or ==). Exact integer counts, so any instruction set gives the same lists.
 __attribute__((always_inline)) inline void sort_lists(Swept& s, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
-    const __m128 ci = s.c[i];
+    const __m128 ci = s.rows[i].c;
     __m128i rank = _mm_setzero_si128();  // minus the counts: a true comparison is -1
-    for (std::size_t j = 0; j < i; ++j) rank = _mm_add_epi32(rank, _mm_castps_si128(_mm_cmple_ps(s.c[j], ci)));
-    for (std::size_t j = i + 1; j < n; ++j) rank = _mm_add_epi32(rank, _mm_castps_si128(_mm_cmplt_ps(s.c[j], ci)));
+    for (std::size_t j = 0; j < i; ++j) rank = _mm_add_epi32(rank, _mm_castps_si128(_mm_cmple_ps(s.rows[j].c, ci)));
+    for (std::size_t j = i + 1; j < n; ++j) rank = _mm_add_epi32(rank, _mm_castps_si128(_mm_cmplt_ps(s.rows[j].c, ci)));
     alignas(16) std::int32_t r[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(r), _mm_sub_epi32(_mm_setzero_si128(), rank));
     const auto offset = static_cast<std::uint16_t>(i * sizeof(Row));
@@ -149,10 +144,11 @@ __attribute__((always_inline)) inline bool build_node(Swept& s, const Pending& p
   const auto leaf = [&] {
     node.count = static_cast<std::uint32_t>(m);
     const std::uint16_t* list = list_of(0);
-    for (std::size_t j = lb; j < le; ++j) {
-      const PrimRef& r = s.prims[list[j] / sizeof(Row)];
-      _mm_store_ps(&s.refs[s.base + j].lo.x, r.lo4());
-      _mm_store_ps(&s.refs[s.base + j].hi.x, r.hi4());
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    for (std::size_t j = lb; j < le; ++j) {  // the reference as it came: lo with the id, hi = -nhi
+      const Row& r = row_at(s, list[j]);
+      _mm_store_ps(&s.refs[s.base + j].lo.x, r.lo);
+      _mm_store_ps(&s.refs[s.base + j].hi.x, _mm_xor_ps(r.nhi, sign));
     }
     return false;
   };
@@ -162,7 +158,7 @@ __attribute__((always_inline)) inline bool build_node(Swept& s, const Pending& p
   float extent[3];
   for (int a = 0; a < 3; ++a) {
     const std::uint16_t* list = list_of(a);
-    extent[a] = lane(s.c[list[le - 1] / sizeof(Row)], a) - lane(s.c[list[lb] / sizeof(Row)], a);
+    extent[a] = centroid_at(s, list[le - 1], a) - centroid_at(s, list[lb], a);
   }
   const bool fits_leaf = m <= s.max_leaf;
   const float leaf_cost = s.intersection_cost * s.tests[m];
@@ -219,13 +215,12 @@ __attribute__((always_inline)) inline bool build_node(Swept& s, const Pending& p
     const int from = (p.buffers >> b) & 1;
     const std::uint16_t* src = s.list[from][b];
     std::uint16_t* dst = s.list[from ^ 1][b];
-    std::size_t l = lb, r = split_at;
+    std::size_t l = lb;  // the next left position; j - l entries went right so far, from split_at on
     for (std::size_t j = lb; j < le; ++j) {
       const std::uint16_t k = src[j];
       const std::size_t is_left = goes_left[k];
-      dst[is_left != 0 ? l : r] = k;
+      dst[is_left != 0 ? l : split_at + j - l] = k;
       l += is_left;
-      r += 1 - is_left;
     }
     left.buffers = right.buffers = static_cast<std::uint8_t>(left.buffers ^ (1u << b));
   }
