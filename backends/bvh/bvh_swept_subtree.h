@@ -17,7 +17,7 @@
 namespace twinray::bvh_binning {
 
 // The largest range built by build_swept_subtree(); the sort is quadratic in it.
-constexpr std::size_t kSweptMax = 16;
+constexpr std::size_t kSweptMax = 12;
 
 // Builds the subtree over refs[begin, end) (2 to kSweptMax primitives, all of the first kind) into
 // nodes[at, ...) depth-first, as Builder::build() lays a serial subtree out (a node, its left subtree, its
