@@ -263,7 +263,8 @@ __attribute__((always_inline)) inline void scatter(const PrimRef* from, PrimRef*
   }
 }
 
-// scatter() with the sides described as in partition_in_place_avx2.
+// scatter() with the sides described as in partition_in_place_avx2; kSecond as there.
+template <bool kSecond>
 TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t li, std::size_t ri,
                                       const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
                                       RangeInfo& right) {
@@ -280,7 +281,7 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     box[side] = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), box[side]);
     centroids[side] = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), centroids[side]);
-    second[side] += p.id >= second_kind_begin ? 1u : 0u;
+    if constexpr (kSecond) second[side] += p.id >= second_kind_begin ? 1u : 0u;
     _mm256_store_ps(&to[side != 0 ? li++ : ri++].lo.x, row);
   }
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -297,9 +298,10 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
 }  // namespace
 
 void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
-                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
-                   bool avx2) {
-  if (avx2) scatter_avx2(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, bool second_kind_present,
+                   RangeInfo& left, RangeInfo& right, bool avx2) {
+  if (avx2 && second_kind_present) scatter_avx2<true>(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+  else if (avx2) scatter_avx2<false>(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
   else scatter(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
 }
 

@@ -344,7 +344,7 @@ class Builder {
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
-          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, left, right);
+          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, second_kind_present, left, right);
         }
         return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, second_kind_present, left, right,
                                      avx2_);
@@ -376,8 +376,8 @@ class Builder {
   // again), each chunk scatters to where its sides start and describes them on the way; the descriptions
   // are merged in chunk order.
   std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const BinMapping& map,
-                                  std::span<const ChunkCounts> chunk_counts, const Split& split, RangeInfo& left,
-                                  RangeInfo& right) const {
+                                  std::span<const ChunkCounts> chunk_counts, const Split& split, bool second_kind_present,
+                                  RangeInfo& left, RangeInfo& right) const {
     const std::size_t n = end - begin;
     const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
     if (chunk_counts.size() != chunks) throw std::logic_error("bvh: a large range was partitioned without its bin counts");
@@ -400,7 +400,7 @@ class Builder {
     for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
       Sides& part = sides[chunk_of(b)];
       scatter_range(from, to, b, e, left_at[chunk_of(b)], right_at[chunk_of(b)], map, split.axis, split.bin, second_kind_begin_,
-                    part.left, part.right, avx2_);
+                    second_kind_present, part.left, part.right, avx2_);
     });
     left = RangeInfo{};
     right = RangeInfo{};
