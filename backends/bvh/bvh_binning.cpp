@@ -187,9 +187,10 @@ __attribute__((always_inline)) inline std::size_t partition_in_place(PrimRef* re
   return static_cast<std::size_t>(lo - refs);
 }
 
-// partition_in_place with AVX2, the sides' boxes and centroid bounds kept in four registers: each as one
-// 8-lane row (lo, -hi), as in bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is
-// -min(-a, -b) bit for bit, in the operand order of extend_lo / extend_hi). The same classification and the
+// partition_in_place with AVX2, the sides' boxes kept in registers as one 8-lane row (lo, -hi) each, as in
+// bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is -min(-a, -b) bit for bit, in the
+// operand order of extend_lo / extend_hi); the centroid bounds with extend_lo / extend_hi themselves (the
+// centroid is one SSE row: two operations, where a (c, -c) row took three). The same classification and the
 // same folds in the same order as partition_in_place, so the same primitive order and the same bits.
 // kSecond: the range may hold primitives of the second kind (otherwise their count is 0 without a test).
 // The mapping is copied into locals and a swap moves each reference as one 32-byte row: the stores into
@@ -203,10 +204,12 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   struct Side {
-    __m256 box, centroids;  // (lo, -hi) of the boxes and of the centroids
+    __m256 box;           // (lo, -hi) of the boxes
+    __m128 c_lo, c_hi;    // of the centroids, folded as RangeInfo::add (two operations, where the row took three)
     std::uint32_t second;
   };
-  Side l{empty, empty, 0}, r{empty, empty, 0};
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  Side l{empty, inf, minus_inf, 0}, r{empty, inf, minus_inf, 0};
   const auto goes_left = [&](const PrimRef& p) {
     const __m128i below = _mm_cmplt_epi32(map.bins_of(p.lo4(), p.hi4()), planes);
     return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
@@ -215,7 +218,8 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
     const __m256 row = _mm256_load_ps(&p.lo.x);
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     side.box = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), side.box);
-    side.centroids = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), side.centroids);
+    side.c_lo = extend_lo(side.c_lo, c);
+    side.c_hi = extend_hi(side.c_hi, c);
     if constexpr (kSecond) side.second += p.id >= second_kind_begin ? 1u : 0u;
   };
   PrimRef* lo = refs + begin;
@@ -236,8 +240,8 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
   const auto describe = [&](const Side& side, RangeInfo& info) TWINRAY_TARGET_AVX2 {
     info.lo = _mm256_castps256_ps128(side.box);
     info.hi = _mm_xor_ps(_mm256_extractf128_ps(side.box, 1), sign);
-    info.c_lo = _mm256_castps256_ps128(side.centroids);
-    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(side.centroids, 1), sign);
+    info.c_lo = side.c_lo;
+    info.c_hi = side.c_hi;
     info.second_kind = side.second;
   };
   describe(l, left);
@@ -271,7 +275,10 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
   const __m128i planes = _mm_set1_epi32(plane);
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-  __m256 box[2] = {empty, empty}, centroids[2] = {empty, empty};  // [0]: right, [1]: left; (lo, -hi)
+  __m256 box[2] = {empty, empty};  // [0]: right, [1]: left; (lo, -hi)
+  // The centroids' bounds folded as RangeInfo::add: two operations, where a (lo, -hi) row took three.
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  __m128 c_lo[2] = {inf, inf}, c_hi[2] = {minus_inf, minus_inf};
   std::uint32_t second[2] = {0, 0};
   for (std::size_t i = b; i < e; ++i) {
     const PrimRef& p = from[i];
@@ -280,7 +287,8 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
     const int side = (_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1;
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     box[side] = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), box[side]);
-    centroids[side] = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), centroids[side]);
+    c_lo[side] = extend_lo(c_lo[side], c);
+    c_hi[side] = extend_hi(c_hi[side], c);
     if constexpr (kSecond) second[side] += p.id >= second_kind_begin ? 1u : 0u;
     _mm256_store_ps(&to[side != 0 ? li++ : ri++].lo.x, row);
   }
@@ -289,8 +297,8 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
     RangeInfo& info = side != 0 ? left : right;
     info.lo = _mm256_castps256_ps128(box[side]);
     info.hi = _mm_xor_ps(_mm256_extractf128_ps(box[side], 1), sign);
-    info.c_lo = _mm256_castps256_ps128(centroids[side]);
-    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(centroids[side], 1), sign);
+    info.c_lo = c_lo[side];
+    info.c_hi = c_hi[side];
     info.second_kind = second[side];
   }
 }
