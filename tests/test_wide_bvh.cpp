@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdlib>
+#include <memory>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -238,6 +239,30 @@ TEST(WideBvh, CollapseIsTheSameOnAnyNumberOfThreads) {
       }
       EXPECT_EQ(one.max_depth, many.max_depth);
       EXPECT_EQ(one.sah_cost, many.sah_cost);
+    }
+  }
+}
+
+// The whole bvh8 build (binary build, swept small subtrees, collapse, gather) gives the same bytes on one, two
+// and four threads: the binary build's chunks and the swept subtrees do not depend on the schedule.
+TEST(WideBvh, WholeBuildIsTheSameOnAnyNumberOfThreads) {
+  for (const SceneGeometry& g : {random_triangle_soup(40000, 11), mixed_spheres_and_triangles(2000, 30000, 12)}) {
+    const auto build_on = [&](int threads) {
+      auto backend = std::make_unique<WideBackend>();
+      tbb::task_arena(threads).execute([&] { backend->build(g); });
+      return backend;
+    };
+    const auto one = build_on(1);
+    for (const int threads : {2, 4}) {
+      const auto many = build_on(threads);
+      ASSERT_EQ(one->nodes().size(), many->nodes().size()) << threads;
+      EXPECT_EQ(0, std::memcmp(one->nodes().data(), many->nodes().data(), one->nodes().size_bytes())) << threads;
+      const PrimitiveStore& a = one->primitives();
+      const PrimitiveStore& b = many->primitives();
+      ASSERT_EQ(a.triangle_keys.size(), b.triangle_keys.size()) << threads;
+      EXPECT_EQ(0, std::memcmp(a.triangle_keys.data(), b.triangle_keys.data(), a.triangle_keys.size() * sizeof(PrimitiveKey))) << threads;
+      ASSERT_EQ(a.sphere_keys.size(), b.sphere_keys.size()) << threads;
+      EXPECT_EQ(0, std::memcmp(a.sphere_keys.data(), b.sphere_keys.data(), a.sphere_keys.size() * sizeof(PrimitiveKey))) << threads;
     }
   }
 }

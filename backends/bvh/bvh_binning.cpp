@@ -50,29 +50,39 @@ TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> ref
                                         const BinMapping& map, std::uint32_t second_kind_begin) {
   const int bins = map.bins;
   // Bins as flat arrays of 3 x kMaxBins: axis a's bin k is entry a kMaxBins + k, so that one vector addition
-  // gives the three entries a primitive updates. Written back to the grid at the end.
+  // gives the three entries a primitive updates, and one shift their byte offsets: the counts are kept at
+  // the boxes' 32-byte stride (Counts), so the same offset addresses a bin's box and its counts and no
+  // per-axis index arithmetic is left. Written back to the grid at the end.
+  struct Counts {
+    std::uint32_t count, second;
+    std::uint32_t unused[6];
+  };
+  static_assert(sizeof(Counts) == sizeof(__m256), "one byte offset for a bin's box and counts");
   __m256 box[3 * kMaxBins];
-  std::uint32_t count[3 * kMaxBins], second_count[3 * kMaxBins];
+  Counts counts[3 * kMaxBins];
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   for (int a = 0; a < 3; ++a)
     for (int k = 0; k < bins; ++k) {
       box[a * kMaxBins + k] = empty;
-      count[a * kMaxBins + k] = 0;
-      second_count[a * kMaxBins + k] = 0;
+      counts[a * kMaxBins + k].count = 0;
+      counts[a * kMaxBins + k].second = 0;
     }
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m128i axis_base = _mm_setr_epi32(0, kMaxBins, 2 * kMaxBins, 0);
-  alignas(16) std::uint32_t entry[4];
   for (std::size_t i = b; i < e; ++i) {
     const PrimRef& r = refs[i];
-    _mm_store_si128(reinterpret_cast<__m128i*>(entry), _mm_add_epi32(map.bins_of(r.lo4(), r.hi4()), axis_base));
+    const __m128i offset = _mm_slli_epi32(_mm_add_epi32(map.bins_of(r.lo4(), r.hi4()), axis_base), 5);  // x 32 bytes
     const __m256 row = _mm256_xor_ps(_mm256_load_ps(&r.lo.x), negate_hi);
     const std::uint32_t second = kSecond && r.id >= second_kind_begin ? 1u : 0u;
+    const std::size_t at[3] = {static_cast<std::uint32_t>(_mm_cvtsi128_si32(offset)),
+                               static_cast<std::uint32_t>(_mm_extract_epi32(offset, 1)),
+                               static_cast<std::uint32_t>(_mm_extract_epi32(offset, 2))};
     for (int axis = 0; axis < 3; ++axis) {
-      __m256& bin = box[entry[axis]];
+      __m256& bin = *reinterpret_cast<__m256*>(reinterpret_cast<char*>(box) + at[axis]);
       bin = _mm256_min_ps(row, bin);  // operand order of extend_lo / extend_hi
-      ++count[entry[axis]];
-      if constexpr (kSecond) second_count[entry[axis]] += second;
+      Counts& c = *reinterpret_cast<Counts*>(reinterpret_cast<char*>(counts) + at[axis]);
+      ++c.count;
+      if constexpr (kSecond) c.second += second;
     }
   }
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -81,8 +91,8 @@ TWINRAY_TARGET_AVX2 void bin_range_avx2(BinGrid& g, std::span<const PrimRef> ref
       const __m256 row = box[a * kMaxBins + k2];
       g.lo[a][k2] = _mm256_castps256_ps128(row);
       g.hi[a][k2] = _mm_xor_ps(_mm256_extractf128_ps(row, 1), sign);
-      g.count[a][k2] = count[a * kMaxBins + k2];
-      g.second_kind[a][k2] = second_count[a * kMaxBins + k2];
+      g.count[a][k2] = counts[a * kMaxBins + k2].count;
+      g.second_kind[a][k2] = counts[a * kMaxBins + k2].second;
     }
   g.mark_used(bins);
 }
@@ -177,21 +187,29 @@ __attribute__((always_inline)) inline std::size_t partition_in_place(PrimRef* re
   return static_cast<std::size_t>(lo - refs);
 }
 
-// partition_in_place with AVX2, the sides' boxes and centroid bounds kept in four registers: each as one
-// 8-lane row (lo, -hi), as in bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is
-// -min(-a, -b) bit for bit, in the operand order of extend_lo / extend_hi). The same classification and the
+// partition_in_place with AVX2, the sides' boxes kept in registers as one 8-lane row (lo, -hi) each, as in
+// bin_range_avx2, so that one min folds a primitive into a box (max(a, b) is -min(-a, -b) bit for bit, in the
+// operand order of extend_lo / extend_hi); the centroid bounds with extend_lo / extend_hi themselves (the
+// centroid is one SSE row: two operations, where a (c, -c) row took three). The same classification and the
 // same folds in the same order as partition_in_place, so the same primitive order and the same bits.
-TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map,
+// kSecond: the range may hold primitives of the second kind (otherwise their count is 0 without a test).
+// The mapping is copied into locals and a swap moves each reference as one 32-byte row: the stores into
+// `refs` could alias `map` and forced a reload of its rows per primitive, and std::swap went through the stack.
+template <bool kSecond>
+TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& mapping,
                                                         int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
                                                         RangeInfo& right) {
+  const BinMapping map = mapping;
   const __m128i planes = _mm_set1_epi32(plane);
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
   struct Side {
-    __m256 box, centroids;  // (lo, -hi) of the boxes and of the centroids
+    __m256 box;           // (lo, -hi) of the boxes
+    __m128 c_lo, c_hi;    // of the centroids, folded as RangeInfo::add (two operations, where the row took three)
     std::uint32_t second;
   };
-  Side l{empty, empty, 0}, r{empty, empty, 0};
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  Side l{empty, inf, minus_inf, 0}, r{empty, inf, minus_inf, 0};
   const auto goes_left = [&](const PrimRef& p) {
     const __m128i below = _mm_cmplt_epi32(map.bins_of(p.lo4(), p.hi4()), planes);
     return ((_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1) != 0;
@@ -200,8 +218,9 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
     const __m256 row = _mm256_load_ps(&p.lo.x);
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     side.box = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), side.box);
-    side.centroids = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), side.centroids);
-    side.second += p.id >= second_kind_begin ? 1u : 0u;
+    side.c_lo = extend_lo(side.c_lo, c);
+    side.c_hi = extend_hi(side.c_hi, c);
+    if constexpr (kSecond) side.second += p.id >= second_kind_begin ? 1u : 0u;
   };
   PrimRef* lo = refs + begin;
   PrimRef* hi = refs + end;
@@ -210,7 +229,10 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
     while (lo < hi && !goes_left(hi[-1])) add(r, *--hi);
     if (lo == hi) break;
     // *lo belongs right and hi[-1] left.
-    std::swap(*lo, *--hi);
+    --hi;
+    const __m256 a = _mm256_load_ps(&lo->lo.x), b = _mm256_load_ps(&hi->lo.x);
+    _mm256_store_ps(&lo->lo.x, b);
+    _mm256_store_ps(&hi->lo.x, a);
     add(l, *lo++);
     add(r, *hi);
   }
@@ -218,8 +240,8 @@ TWINRAY_TARGET_AVX2 std::size_t partition_in_place_avx2(PrimRef* refs, std::size
   const auto describe = [&](const Side& side, RangeInfo& info) TWINRAY_TARGET_AVX2 {
     info.lo = _mm256_castps256_ps128(side.box);
     info.hi = _mm_xor_ps(_mm256_extractf128_ps(side.box, 1), sign);
-    info.c_lo = _mm256_castps256_ps128(side.centroids);
-    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(side.centroids, 1), sign);
+    info.c_lo = side.c_lo;
+    info.c_hi = side.c_hi;
     info.second_kind = side.second;
   };
   describe(l, left);
@@ -245,14 +267,18 @@ __attribute__((always_inline)) inline void scatter(const PrimRef* from, PrimRef*
   }
 }
 
-// scatter() with the sides described as in partition_in_place_avx2.
+// scatter() with the sides described as in partition_in_place_avx2; kSecond as there.
+template <bool kSecond>
 TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t li, std::size_t ri,
                                       const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left,
                                       RangeInfo& right) {
   const __m128i planes = _mm_set1_epi32(plane);
   const __m256 negate_hi = _mm256_setr_ps(0.0f, 0.0f, 0.0f, 0.0f, -0.0f, -0.0f, -0.0f, -0.0f);
   const __m256 empty = _mm256_set1_ps(std::numeric_limits<float>::infinity());
-  __m256 box[2] = {empty, empty}, centroids[2] = {empty, empty};  // [0]: right, [1]: left; (lo, -hi)
+  __m256 box[2] = {empty, empty};  // [0]: right, [1]: left; (lo, -hi)
+  // The centroids' bounds folded as RangeInfo::add: two operations, where a (lo, -hi) row took three.
+  const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity()), minus_inf = _mm_set1_ps(-std::numeric_limits<float>::infinity());
+  __m128 c_lo[2] = {inf, inf}, c_hi[2] = {minus_inf, minus_inf};
   std::uint32_t second[2] = {0, 0};
   for (std::size_t i = b; i < e; ++i) {
     const PrimRef& p = from[i];
@@ -261,8 +287,9 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
     const int side = (_mm_movemask_ps(_mm_castsi128_ps(below)) >> axis) & 1;
     const __m128 c = _mm_mul_ps(_mm_set1_ps(0.5f), _mm_add_ps(p.lo4(), p.hi4()));  // as RangeInfo::add
     box[side] = _mm256_min_ps(_mm256_xor_ps(row, negate_hi), box[side]);
-    centroids[side] = _mm256_min_ps(_mm256_xor_ps(_mm256_set_m128(c, c), negate_hi), centroids[side]);
-    second[side] += p.id >= second_kind_begin ? 1u : 0u;
+    c_lo[side] = extend_lo(c_lo[side], c);
+    c_hi[side] = extend_hi(c_hi[side], c);
+    if constexpr (kSecond) second[side] += p.id >= second_kind_begin ? 1u : 0u;
     _mm256_store_ps(&to[side != 0 ? li++ : ri++].lo.x, row);
   }
   const __m128 sign = _mm_set1_ps(-0.0f);
@@ -270,8 +297,8 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
     RangeInfo& info = side != 0 ? left : right;
     info.lo = _mm256_castps256_ps128(box[side]);
     info.hi = _mm_xor_ps(_mm256_extractf128_ps(box[side], 1), sign);
-    info.c_lo = _mm256_castps256_ps128(centroids[side]);
-    info.c_hi = _mm_xor_ps(_mm256_extractf128_ps(centroids[side], 1), sign);
+    info.c_lo = c_lo[side];
+    info.c_hi = c_hi[side];
     info.second_kind = second[side];
   }
 }
@@ -279,15 +306,20 @@ TWINRAY_TARGET_AVX2 void scatter_avx2(const PrimRef* from, PrimRef* to, std::siz
 }  // namespace
 
 void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
-                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
-                   bool avx2) {
-  if (avx2) scatter_avx2(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, bool second_kind_present,
+                   RangeInfo& left, RangeInfo& right, bool avx2) {
+  if (avx2 && second_kind_present) scatter_avx2<true>(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
+  else if (avx2) scatter_avx2<false>(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
   else scatter(from, to, b, e, left_at, right_at, map, axis, plane, second_kind_begin, left, right);
 }
 
 std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
-                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2) {
-  if (avx2) return partition_in_place_avx2(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+                                  std::uint32_t second_kind_begin, bool second_kind_present, RangeInfo& left, RangeInfo& right,
+                                  bool avx2) {
+  if (avx2) {
+    if (second_kind_present) return partition_in_place_avx2<true>(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+    return partition_in_place_avx2<false>(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
+  }
   return partition_in_place(refs, begin, end, map, axis, plane, second_kind_begin, left, right);
 }
 

@@ -208,16 +208,20 @@ struct BinMapping {
 // Splits refs[begin, end) in place where the primitives' bins on `axis` (BinMapping::bins_of, as binned)
 // are below `plane`, and describes both sides on the way: a Hoare partition, every primitive classified once
 // and folded into the side it ends on, so a small node needs one pass over its primitives instead of three.
-// Returns the end of the left side. `avx2`: the AVX2 build of the same operations (the same result).
+// Returns the end of the left side. `second_kind_present`: the range may hold primitives of the second kind
+// (otherwise both sides count none without testing ids). `avx2`: the AVX2 build of the same operations
+// (the same result).
 std::size_t partition_small_range(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, int axis, int plane,
-                                  std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right, bool avx2);
+                                  std::uint32_t second_kind_begin, bool second_kind_present, RangeInfo& left, RangeInfo& right,
+                                  bool avx2);
 
 // Scatters from[b, e) stably into `to`, the primitives partition_small_range() would put left from to[left_at]
-// on and the others from to[right_at] on, and describes both sides (folded in the order of `from`). `avx2`:
-// the AVX2 build of the same operations (the same result).
+// on and the others from to[right_at] on, and describes both sides (folded in the order of `from`).
+// `second_kind_present` as for partition_small_range(). `avx2`: the AVX2 build of the same operations (the
+// same result).
 void scatter_range(const PrimRef* from, PrimRef* to, std::size_t b, std::size_t e, std::size_t left_at, std::size_t right_at,
-                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, RangeInfo& left, RangeInfo& right,
-                   bool avx2);
+                   const BinMapping& map, int axis, int plane, std::uint32_t second_kind_begin, bool second_kind_present,
+                   RangeInfo& left, RangeInfo& right, bool avx2);
 
 // Clearing 3 x 16 bins costs about as much as the branches of binning 32 primitives lazily; from the same
 // size on, sweeping the cleared grid's three axes at once beats sweeping the occupied bins one axis at a

@@ -2,6 +2,7 @@
 
 #include "backends/bvh/bvh_binning.h"
 #include "backends/bvh/bvh_builder_memory.h"
+#include "backends/bvh/bvh_swept_subtree.h"
 
 #include "backends/bvh/primitive_store.h"
 #include "backends/simd/isa.h"
@@ -129,7 +130,7 @@ class Builder {
     RangeInfo left_info, right_info;
     bool children_in_scratch = in_scratch;
     const std::size_t mid =
-        partition(refs, begin, end, map, split, left_info, right_info, children_in_scratch, chunk_counts);
+        partition(refs, begin, end, map, split, info.second_kind != 0, left_info, right_info, children_in_scratch, chunk_counts);
     const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
     nodes_[at] = BvhNode{box.lo, static_cast<std::uint32_t>(right_at), box.hi, 0};
     std::size_t count = 1;
@@ -168,6 +169,13 @@ class Builder {
       node.count = 1u | (info.second_kind == 1 ? BvhNode::kSphereLeafBit : 0u);
       return 1;
     }
+    // Small subtrees of one kind sweep their sorted centroids instead of binning each node
+    // (bvh_swept_subtree.h); a range with a non-finite coordinate comes back (0) and is binned.
+    if (n <= kSweptMax && info.second_kind == 0 && o_.split_method == BvhSplitMethod::BinnedSah &&
+        depth + kSweptMax < kMedianOnlyDepth) {
+      const std::size_t count = build_swept_subtree(home_, begin, end, nodes_, at, o_, avx2_);
+      if (count != 0) return count;
+    }
 
     BinMapping map{};
     const Split split = choose_split(home_, begin, end, info, depth, mixed, map);
@@ -177,7 +185,7 @@ class Builder {
     }
     RangeInfo left_info, right_info;
     bool in_scratch = false;  // small ranges stay in place
-    const std::size_t mid = partition(home_, begin, end, map, split, left_info, right_info, in_scratch, {});
+    const std::size_t mid = partition(home_, begin, end, map, split, info.second_kind != 0, left_info, right_info, in_scratch, {});
 
     if (o_.parallel && n >= kParallelGrain) {
       const std::size_t right_at = at + 2 * (mid - begin);  // after the left child's 2 (mid - begin) - 1
@@ -323,7 +331,8 @@ class Builder {
   // the binning's `chunk_counts`), small ones in place; the choice depends on the size only, so serial and
   // parallel builds stay identical.
   std::size_t partition(PrimRef* refs, std::size_t begin, std::size_t end, const BinMapping& map, const Split& split,
-                        RangeInfo& left, RangeInfo& right, bool& in_scratch, std::span<const ChunkCounts> chunk_counts) const {
+                        bool second_kind_present, RangeInfo& left, RangeInfo& right, bool& in_scratch,
+                        std::span<const ChunkCounts> chunk_counts) const {
     PrimRef* first = refs + begin;
     PrimRef* last = refs + end;
     std::size_t mid = end;
@@ -335,9 +344,10 @@ class Builder {
         if (end - begin >= kParallelRangeGrain) {
           PrimRef* const to = in_scratch ? home_ : scratch_;
           in_scratch = !in_scratch;
-          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, left, right);
+          return partition_in_chunks(refs, to, begin, end, map, chunk_counts, split, second_kind_present, left, right);
         }
-        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, left, right, avx2_);
+        return partition_small_range(refs, begin, end, map, axis, split.bin, second_kind_begin_, second_kind_present, left, right,
+                                     avx2_);
       }
       case Split::Kind::ByKind:
         mid = static_cast<std::size_t>(
@@ -366,8 +376,8 @@ class Builder {
   // again), each chunk scatters to where its sides start and describes them on the way; the descriptions
   // are merged in chunk order.
   std::size_t partition_in_chunks(const PrimRef* from, PrimRef* to, std::size_t begin, std::size_t end, const BinMapping& map,
-                                  std::span<const ChunkCounts> chunk_counts, const Split& split, RangeInfo& left,
-                                  RangeInfo& right) const {
+                                  std::span<const ChunkCounts> chunk_counts, const Split& split, bool second_kind_present,
+                                  RangeInfo& left, RangeInfo& right) const {
     const std::size_t n = end - begin;
     const std::size_t chunks = (n + kRangeChunk - 1) / kRangeChunk;
     if (chunk_counts.size() != chunks) throw std::logic_error("bvh: a large range was partitioned without its bin counts");
@@ -390,7 +400,7 @@ class Builder {
     for_chunks(begin, end, [&](std::size_t b, std::size_t e) {
       Sides& part = sides[chunk_of(b)];
       scatter_range(from, to, b, e, left_at[chunk_of(b)], right_at[chunk_of(b)], map, split.axis, split.bin, second_kind_begin_,
-                    part.left, part.right, avx2_);
+                    second_kind_present, part.left, part.right, avx2_);
     });
     left = RangeInfo{};
     right = RangeInfo{};
