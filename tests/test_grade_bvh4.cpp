@@ -97,22 +97,29 @@ TEST(GradeBvh4, WrongVisitOrderKeepsEveryAnswerRight) {
   EXPECT_GT(per_ray(card, "primitives_per_ray"), per_ray(good, "primitives_per_ray")) << check_lines(card);
 }
 
-// A batch path that carries the previous ray's closest t over as the next ray's bound. `twinray grade` cannot
-// see it: the isolated worker calls the single-ray entry points, one ray at a time, to pin a crash to its ray
-// (docs/plugin-abi.md, "The worker"), so the plugin passes. In process, where twinray calls the batch entry
-// points, crosscheck finds it.
-TEST(GradeBvh4, BatchOnlyBugIsInvisibleToTheIsolatedGrader) {
-  const Scorecard card = grade_bvh4(bvh4_plugin("batch-stale-tmax"), {"closest-soup"});
+// A batch path that carries the previous ray's closest t over as the next ray's bound. The answer checks call
+// the single-ray entry points, one ray at a time, and pass it; the batch-calls check calls intersect_batch and
+// occluded_batch, as twinray does whenever a plugin has them, and fails it (docs/grading.md, "batch-calls").
+// crosscheck finds it too, in process and, now that the worker calls batch functions, isolated.
+TEST(GradeBvh4, BatchOnlyBugFailsTheBatchCallsCheck) {
+  const Scorecard card = grade_bvh4(bvh4_plugin("batch-stale-tmax"), {"closest-soup", "batch-calls-cornell"});
   EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << check_lines(card);
-  const auto crosscheck = [](const std::filesystem::path& plugin) {
-    return testing::run_twinray("crosscheck procedural:soup:2000:7 --backends embree,plugin-inprocess:" +
-                                plugin.string() + " --rays 2000 --kinds uniform");
-  };
-  const testing::CommandResult bad = crosscheck(bvh4_plugin("batch-stale-tmax"));
-  EXPECT_EQ(bad.exit_code, 1) << bad.output;
-  EXPECT_NE(bad.output.find("genuine"), std::string::npos) << bad.output;
-  const testing::CommandResult good = crosscheck(bvh4_plugin());
-  EXPECT_EQ(good.exit_code, 0) << good.output;
+  const CheckResult& caught = check_named(card, "batch-calls-cornell");
+  EXPECT_EQ(caught.outcome, Outcome::Fail) << check_lines(card);
+  EXPECT_EQ(caught.points, 0.0);
+  EXPECT_NE(caught.detail.find("answers through intersect_batch and occluded_batch wrong"), std::string::npos)
+      << caught.detail;
+  EXPECT_FALSE(caught.reproduce.empty());
+  EXPECT_FALSE(card.passed());
+  EXPECT_TRUE(card.intersect_batch && card.occluded_batch);
+  // crosscheck traces batches, so it calls the batch functions, in process and isolated alike.
+  for (const char* backend : {"plugin-inprocess:", "plugin:"}) {
+    const testing::CommandResult bad =
+        testing::run_twinray("crosscheck procedural:soup:2000:7 --backends embree," + std::string(backend) +
+                             bvh4_plugin("batch-stale-tmax").string() + " --rays 2000 --kinds uniform");
+    EXPECT_EQ(bad.exit_code, 1) << backend << "\n" << bad.output;
+    EXPECT_NE(bad.output.find("genuine"), std::string::npos) << bad.output;
+  }
 }
 
 }  // namespace bvh4_test

@@ -46,7 +46,11 @@ constexpr auto kTeardownWait = std::chrono::seconds(10);
 // on_worker_exit).
 constexpr std::uint32_t kDeathBump = 1u << 31;
 
-enum class Stage { Load, Build, Intersect, Occluded, Destroy };
+enum class Stage { Load, Build, Intersect, Occluded, Destroy, IntersectBatch, OccludedBatch };
+
+bool is_query(Stage s) {
+  return s == Stage::Intersect || s == Stage::Occluded || s == Stage::IntersectBatch || s == Stage::OccludedBatch;
+}
 
 const char* stage_name(Stage s) {
   switch (s) {
@@ -55,6 +59,8 @@ const char* stage_name(Stage s) {
     case Stage::Intersect: return "intersect";
     case Stage::Occluded: return "occluded";
     case Stage::Destroy: return "destroy";
+    case Stage::IntersectBatch: return "intersect_batch";
+    case Stage::OccludedBatch: return "occluded_batch";
   }
   return "?";
 }
@@ -163,6 +169,10 @@ class IsolatedPluginBackend::Impl {
     instance_ = static_cast<std::uint32_t>(index);
   }
   const PluginLimits& limits() const { return limits_; }
+  void set_batch_path(BatchPath path) { batch_path_ = path; }
+  BatchPath batch_path() const { return batch_path_; }
+  bool has_intersect_batch() const { return (batch_functions_ & pw::kHasIntersectBatch) != 0; }
+  bool has_occluded_batch() const { return (batch_functions_ & pw::kHasOccludedBatch) != 0; }
   std::string captured_output() const { return worker_ ? worker_->output() : std::string(); }
   std::optional<PluginFailure> failure() const;
   const std::string& sandbox_description() const { return sandbox_; }
@@ -222,7 +232,9 @@ class IsolatedPluginBackend::Impl {
   [[noreturn]] void throw_failure(int channel) const;
   void throw_if_failed() const;
   // The ray at `request_index` of the channel's current request: its index in the caller's span and its value.
-  void attribute_ray(const RequestContext& context, std::uint32_t request_index, PluginFailureDetails& d) const;
+  // `whole_call`: the failure is the batch call's in flight (a crash, a timeout), not one ray's own answer.
+  void attribute_ray(const RequestContext& context, std::uint32_t request_index, PluginFailureDetails& d,
+                     bool whole_call = true) const;
 
   void on_worker_exit(const WorkerTermination& t);
   PluginFailureDetails classify_death(const WorkerTermination& t, int& channel) const;
@@ -232,6 +244,8 @@ class IsolatedPluginBackend::Impl {
   PluginLimits limits_;
   std::string name_;
   std::uint32_t flags_ = 0;
+  std::uint32_t batch_functions_ = 0;  // pw::kHasIntersectBatch | pw::kHasOccludedBatch
+  BatchPath batch_path_ = BatchPath::PluginBatch;
   std::string sandbox_;
 
   SharedMemoryFile control_file_;
@@ -315,6 +329,7 @@ void IsolatedPluginBackend::Impl::wait_for_startup() {
     case pw::Startup::Ready:
       name_ = "plugin:" + bounded_string(h.plugin_name, sizeof h.plugin_name);
       flags_ = h.plugin_flags;
+      batch_functions_ = h.batch_functions & (pw::kHasIntersectBatch | pw::kHasOccludedBatch);
       sandbox_ = bounded_string(h.sandbox, sizeof h.sandbox);
       if (h.sandbox_complete == 0) warn_once_about_sandbox(sandbox_);
       return;
@@ -402,7 +417,8 @@ void IsolatedPluginBackend::Impl::check_answer(const Lease& lease, pw::Op op, st
                    fmt::format("the request was changed to op {}, {} rays (posted: op {}, {} rays)", static_cast<std::uint32_t>(op_now),
                                count_now, static_cast<std::uint32_t>(op), count));
   const pw::Status status = c.status;
-  const bool query = op == pw::Op::Intersect || op == pw::Op::Occluded;
+  const bool query = op == pw::Op::Intersect || op == pw::Op::Occluded || op == pw::Op::IntersectBatch ||
+                     op == pw::Op::OccludedBatch;
   const bool possible = status == pw::Status::Ok || status == pw::Status::Exception || status == pw::Status::OutOfMemory ||
                         (!query && (status == pw::Status::BuildFailed || status == pw::Status::SetupFailed));
   if (!possible) fail_corrupted(lease, stage, fmt::format("status {}", static_cast<std::uint32_t>(status)));
@@ -539,12 +555,20 @@ std::optional<PluginFailure> IsolatedPluginBackend::Impl::failure() const {
 }
 
 void IsolatedPluginBackend::Impl::attribute_ray(const RequestContext& context, std::uint32_t request_index,
-                                                PluginFailureDetails& d) const {
+                                                PluginFailureDetails& d, bool whole_call) const {
   if (request_index >= context.count) return;  // the worker's word, so checked
   const std::size_t index = context.source != nullptr ? context.source[request_index] : request_index;
   if (index >= context.rays.size()) return;
   d.ray_index = index;
   d.ray = context.rays[index];
+  if (whole_call && (context.stage == Stage::IntersectBatch || context.stage == Stage::OccludedBatch)) {
+    // One call of the plugin's batch function was under way: the worker knows its first ray only.
+    const std::uint32_t calls_rays = std::min<std::uint32_t>(context.count - request_index,
+                                                             static_cast<std::uint32_t>(pw::kBatchCallRays));
+    const std::string where = fmt::format("in a call of {} rays from ray {} (the batch function gives no ray of its own)",
+                                          calls_rays, index);
+    d.detail = d.detail.empty() ? where : where + "; " + d.detail;
+  }
 }
 
 void IsolatedPluginBackend::Impl::fail_timeout(const Lease& lease, Stage stage, bool deadline_passed,
@@ -609,7 +633,7 @@ void IsolatedPluginBackend::Impl::fail_bad_hit(const Lease& lease, Stage stage, 
   d.stage = stage_name(stage);
   {
     std::lock_guard lock(lease.slot().mutex);
-    attribute_ray(lease.slot().context, static_cast<std::uint32_t>(request_index), d);
+    attribute_ray(lease.slot().context, static_cast<std::uint32_t>(request_index), d, false);
   }
   d.detail = fmt::format("reported a hit on geom_id {}, prim_id {}, which the scene does not have", h.geom_id, h.prim_id);
   fail(d, static_cast<int>(lease.index()));
@@ -662,7 +686,7 @@ PluginFailureDetails IsolatedPluginBackend::Impl::classify_death(const WorkerTer
     const RequestContext& context = slots_[static_cast<std::size_t>(channel)].context;
     if (context.active) {
       d.stage = stage_name(context.stage);
-      if (context.stage == Stage::Intersect || context.stage == Stage::Occluded)
+      if (is_query(context.stage))
         attribute_ray(context, block_->channels[static_cast<std::size_t>(channel)].current.load(), d);
     }
   }
@@ -836,21 +860,25 @@ void IsolatedPluginBackend::Impl::query_in_chunks(std::span<const Ray> rays, pw:
 
 void IsolatedPluginBackend::Impl::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) {
   assert(rays.size() == hits.size());
+  const bool batch = batch_path_ == BatchPath::PluginBatch && has_intersect_batch();
+  const Stage stage = batch ? Stage::IntersectBatch : Stage::Intersect;
   query_in_chunks(
-      rays, pw::Op::Intersect, Stage::Intersect, stats, [&](std::size_t i) { hits[i] = Hit{}; },
+      rays, batch ? pw::Op::IntersectBatch : pw::Op::Intersect, stage, stats, [&](std::size_t i) { hits[i] = Hit{}; },
       [&](const Lease& lease, std::uint32_t k, std::size_t i, pw::RayResult r) {
-        if (!found_of(lease, Stage::Intersect, r.found)) return;
-        if (!primitives_[instance_].exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, Stage::Intersect, k, r.hit);
+        if (!found_of(lease, stage, r.found)) return;
+        if (!primitives_[instance_].exists(r.hit.geom_id, r.hit.prim_id)) fail_bad_hit(lease, stage, k, r.hit);
         hits[i] = from_plugin_hit(r.hit);
       });
 }
 
 void IsolatedPluginBackend::Impl::occluded(std::span<const Ray> rays, std::span<std::uint8_t> occluded, QueryStats* stats) {
   assert(rays.size() == occluded.size());
+  const bool batch = batch_path_ == BatchPath::PluginBatch && has_occluded_batch();
+  const Stage stage = batch ? Stage::OccludedBatch : Stage::Occluded;
   query_in_chunks(
-      rays, pw::Op::Occluded, Stage::Occluded, stats, [&](std::size_t i) { occluded[i] = 0; },
+      rays, batch ? pw::Op::OccludedBatch : pw::Op::Occluded, stage, stats, [&](std::size_t i) { occluded[i] = 0; },
       [&](const Lease& lease, std::uint32_t, std::size_t i, pw::RayResult r) {
-        occluded[i] = found_of(lease, Stage::Occluded, r.found) ? 1 : 0;
+        occluded[i] = found_of(lease, stage, r.found) ? 1 : 0;
       });
 }
 
@@ -931,6 +959,10 @@ void IsolatedPluginBackend::set_deadline(std::optional<std::chrono::steady_clock
   impl_->set_deadline(deadline);
 }
 const PluginLimits& IsolatedPluginBackend::limits() const { return impl_->limits(); }
+void IsolatedPluginBackend::set_batch_path(BatchPath path) { impl_->set_batch_path(path); }
+BatchPath IsolatedPluginBackend::batch_path() const { return impl_->batch_path(); }
+bool IsolatedPluginBackend::has_intersect_batch() const { return impl_->has_intersect_batch(); }
+bool IsolatedPluginBackend::has_occluded_batch() const { return impl_->has_occluded_batch(); }
 void IsolatedPluginBackend::use_instance(std::size_t index) { impl_->use_instance(index); }
 std::string IsolatedPluginBackend::captured_output() const { return impl_->captured_output(); }
 std::optional<PluginFailure> IsolatedPluginBackend::failure() const { return impl_->failure(); }

@@ -25,6 +25,15 @@
 
 namespace twinray {
 
+// Which plugin functions the batch queries (intersect/occluded over a span) call in the worker.
+//   PluginBatch  the plugin's intersect_batch / occluded_batch where it has them, else intersect1 / occluded1 per
+//                ray: what the in-process backend does (plugin_backend.cpp), so renders, crosscheck and every
+//                other command see the same code path in and out of isolation. The default.
+//   SingleCalls  intersect1 / occluded1 per ray, always: the grader's answer checks use it to judge the required
+//                single-ray path, and its batch-calls check judges the batch functions (docs/grading.md).
+// Single-ray queries (intersect(ray, hit), occluded(ray)) always call intersect1 / occluded1.
+enum class BatchPath { PluginBatch, SingleCalls };
+
 class IsolatedPluginBackend final : public Backend {
  public:
   // Starts a worker, which loads `so` and creates the plugin instance. Throws InputError for the load errors
@@ -46,6 +55,12 @@ class IsolatedPluginBackend final : public Backend {
   // Not to be called concurrently with queries.
   void set_deadline(std::optional<std::chrono::steady_clock::time_point> deadline);
   const PluginLimits& limits() const;
+  // See BatchPath. Not to be called concurrently with queries.
+  void set_batch_path(BatchPath path);
+  BatchPath batch_path() const;
+  // Whether the plugin's table has the optional batch entry points (read by the worker when it loaded it).
+  bool has_intersect_batch() const;
+  bool has_occluded_batch() const;
   // Which of the worker's two plugin instances the following calls (build, queries, build_stats) go to: 0, the
   // one created at start (the default), or 1, a second instance of the same library in the same process,
   // created by its first build. For the grader's two-instances check (the ABI promises that instances in one

@@ -21,7 +21,8 @@
 //          "load"          reserved: a plugin that cannot be loaded is an InputError (missing file, not a
 //                          library, no entry point, wrong ABI, NULL function, create() NULL), and one that
 //                          crashes or hangs while loading gets one of the causes above with stage "load"
-//   stage  "load" (dlopen, static constructors, create), "build", "intersect", "occluded", "destroy"
+//   stage  "load" (dlopen, static constructors, create), "build", "intersect", "occluded", "destroy",
+//          "intersect_batch", "occluded_batch" (a call of the plugin's batch function: ray_index is its first ray)
 
 #include "core/geometry/ray.h"
 

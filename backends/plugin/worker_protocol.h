@@ -24,7 +24,7 @@
 namespace twinray::plugin_worker {
 
 inline constexpr std::uint32_t kMagic = 0x7477726bu;  // "twrk"
-inline constexpr std::uint32_t kProtocolVersion = 3;
+inline constexpr std::uint32_t kProtocolVersion = 4;
 
 // File descriptors of the worker: 0 /dev/null, 1 and 2 the output pipe, kControlFd the memfd, kLifelineFd the
 // read end of a pipe whose write end only the parent holds (EOF: the parent is gone, the worker exits).
@@ -41,7 +41,29 @@ inline constexpr std::uint32_t kInstances = 2;
 // microseconds) is amortised to nothing while a channel stays a small part of the worker's memory.
 inline constexpr std::size_t kChunkRays = 4096;
 
-enum class Op : std::uint32_t { None = 0, Build = 1, Intersect = 2, Occluded = 3, Destroy = 4 };
+// Rays per call of the plugin's own batch function (intersect_batch, occluded_batch): a request of up to
+// kChunkRays rays is handed over in calls of at most this many, as the in-process backend hands them over
+// (plugin_backend.cpp), so a plugin sees the same batch sizes in and out of isolation. It is also what one
+// "call" is for the per-call time limit and what a crash is pinned to: the worker sets `current` to the first
+// ray of each batch call (a batch function gives no progress of its own), and to the request's last ray when
+// the last call has returned.
+inline constexpr std::size_t kBatchCallRays = 256;
+
+// Intersect / Occluded: one intersect1 / occluded1 call per ray. IntersectBatch / OccludedBatch: the plugin's
+// intersect_batch / occluded_batch (twinray sends them only to a plugin that has them: Header::batch_functions).
+enum class Op : std::uint32_t {
+  None = 0,
+  Build = 1,
+  Intersect = 2,
+  Occluded = 3,
+  Destroy = 4,
+  IntersectBatch = 5,
+  OccludedBatch = 6,
+};
+
+// Header::batch_functions: which optional batch entry points the plugin's table has.
+inline constexpr std::uint32_t kHasIntersectBatch = 1u;
+inline constexpr std::uint32_t kHasOccludedBatch = 2u;
 
 enum class Status : std::uint32_t {
   Ok = 0,
@@ -88,6 +110,7 @@ struct Header {
   std::atomic<std::uint32_t> startup{static_cast<std::uint32_t>(Startup::Starting)};
   std::atomic<std::uint32_t> loading{0};  // 1 while the main thread runs plugin code (dlopen, create)
   std::uint32_t plugin_flags = 0;
+  std::uint32_t batch_functions = 0;  // kHasIntersectBatch | kHasOccludedBatch
   char plugin_name[128] = {};
   char message[2048] = {};   // why loading or setting up failed
   char sandbox[512] = {};    // which layers of the sandbox are in place, in words
@@ -98,7 +121,10 @@ struct Header {
 // One result of a query: the hit (closest-hit calls) and the plugin's return value.
 struct RayResult {
   twinray_hit hit;
-  std::uint32_t found;  // intersect1's or occluded1's return value, normalised to 0 or 1
+  // intersect1's or occluded1's return value, normalised to 0 or 1; for the batch ops, whether intersect_batch's
+  // hit has a geom_id other than TWINRAY_INVALID_ID, or occluded_batch's byte is not 0 (as plugin_backend.cpp
+  // reads them)
+  std::uint32_t found;
 };
 
 struct BuildStatsWire {

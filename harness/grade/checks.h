@@ -49,6 +49,9 @@ class PluginInstance {
   const IsolatedPluginBackend* operator->() const { return backend_.get(); }
   // Which of the worker's instances the following calls go to (IsolatedPluginBackend::use_instance).
   void use_instance(std::size_t index) { backend_->use_instance(index); }
+  // Batch queries call the plugin's batch functions from now on (the batch-calls check; launched instances
+  // call its single-ray functions, PluginLauncher::launch).
+  void use_batch_functions() { backend_->set_batch_path(BatchPath::PluginBatch); }
   // Ends the worker; afterwards the instance answers nothing. Never throws.
   void end();
 
@@ -123,6 +126,7 @@ CheckVerdict run_thread_safety_check(CheckContext& context);
 CheckVerdict run_determinism_check(CheckContext& context);
 CheckVerdict run_performance_check(CheckContext& context);
 CheckVerdict run_tree_quality_check(CheckContext& context);
+CheckVerdict run_batch_check(CheckContext& context);  // batch-calls
 
 // `twinray grade PLUGIN --suite SUITE --check NAME` for any check of the suite.
 std::string grade_command(const CheckEnvironment& env, const CheckSpec& spec);

@@ -111,7 +111,9 @@ void execute(CheckContext& ctx, const std::filesystem::path& image_dir, CheckRes
     r.detail = one_line(f.detail);  // the plugin's build error message or exception text, as one safe line
     // One ray replays a crash or hang only when it happened to that ray alone: under the thread-safety check's
     // concurrent calls, a crash is the race's, and tracing the ray it hit answers normally.
-    const bool concurrent = ctx.spec.category == Category::ThreadSafety;
+    // Nor does it replay one of a batch call (`twinray trace` asks intersect1 and occluded1; the failure names
+    // the call's first ray): the check reproduces it.
+    const bool concurrent = ctx.spec.category == Category::ThreadSafety || ctx.spec.category == Category::BatchCalls;
     r.reproduce = f.ray && !concurrent ? ctx.trace_command(*f.ray) : ctx.grade_command();
     // A crash on a ray that, traced alone, is answered normally needs the calls before it (memory that ran out
     // over many calls, state kept between them): the check reproduces it, that ray does not.
@@ -160,6 +162,8 @@ Scorecard run_grade(const GradeSettings& settings) {
   card.plugin = plugin.path().string();
   card.plugin_name = one_line(plugin.name());
   card.claims = plugin.traits();
+  card.intersect_batch = plugin.has_intersect_batch();
+  card.occluded_batch = plugin.has_occluded_batch();
   card.suite = suite.name;
   card.suite_path = suite.manifest.string();
   card.time_scale = settings.time_scale;
@@ -214,7 +218,14 @@ Scorecard run_grade(const GradeSettings& settings) {
       unmet += (unmet.empty() ? "" : ", ") + need + " (" + std::string(to_string(it->second->outcome)) + ")";
       unmet_uncounted = unmet_uncounted || (it->second->outcome == Outcome::Skipped && it->second->max_points == 0.0);
     }
-    if ((scene_spec.needs_shared_data || second_needs_shared_data) && !shared_data) {
+    if (spec.category == Category::BatchCalls && !plugin.has_intersect_batch() && !plugin.has_occluded_batch()) {
+      // The batch functions are optional: without them there is nothing to judge, and nothing to lose.
+      r.outcome = Outcome::Skipped;
+      r.max_points = 0.0;
+      r.detail = "not applicable: the plugin has no intersect_batch or occluded_batch (optional; twinray calls "
+                 "intersect1 and occluded1 instead, which the other checks judge); not counted";
+      r.figures = {{"applicable", false}};
+    } else if ((scene_spec.needs_shared_data || second_needs_shared_data) && !shared_data) {
       r.outcome = Outcome::Skipped;
       r.max_points = 0.0;
       r.detail = fmt::format("scene '{}' needs the shared data folder (set TWINRAY_SHARED); not counted",

@@ -38,6 +38,7 @@ nlohmann::json scorecard_json(const Scorecard& card) {
           {"claims", {{"watertight", card.claims.watertight},
                       {"honours_ties", card.claims.honours_ties},
                       {"counts_traversal", card.claims.counts_traversal}}},
+          {"batch_functions", {{"intersect_batch", card.intersect_batch}, {"occluded_batch", card.occluded_batch}}},
           {"suite_path", card.suite_path},
           {"counts", {{"pass", card.count(Outcome::Pass)},
                       {"fail", card.count(Outcome::Fail)},

@@ -39,6 +39,8 @@ PluginLauncher::PluginLauncher(std::filesystem::path so) : path_(std::filesystem
     const std::unique_ptr<IsolatedPluginBackend> probe = make_isolated_plugin_backend(path_);
     name_ = std::string(probe->name());
     traits_ = probe->traits();
+    intersect_batch_ = probe->has_intersect_batch();
+    occluded_batch_ = probe->has_occluded_batch();
   } catch (const PluginFailure& f) {
     // Dying while loading (a crashing static constructor or create()) is the plugin's failure, but there is
     // nothing to grade: every check would fail the same way.
@@ -47,7 +49,9 @@ PluginLauncher::PluginLauncher(std::filesystem::path so) : path_(std::filesystem
 }
 
 std::unique_ptr<IsolatedPluginBackend> PluginLauncher::launch(const LaunchLimits& limits) const {
-  return make_isolated_plugin_backend(path_, limits_of(limits));
+  std::unique_ptr<IsolatedPluginBackend> backend = make_isolated_plugin_backend(path_, limits_of(limits));
+  backend->set_batch_path(BatchPath::SingleCalls);
+  return backend;
 }
 
 FailureReport classify_failure(const std::exception_ptr& failure, double ray_seconds, const std::string& deadline) {

@@ -32,17 +32,23 @@ class PluginLauncher {
   // plugin, a wrong ABI version, a plugin that dies while loading) and to read its name and claims.
   explicit PluginLauncher(std::filesystem::path so);
 
-  // A fresh, unbuilt instance in a new worker process, with the check's deadline and memory limit.
+  // A fresh, unbuilt instance in a new worker process, with the check's deadline and memory limit. Its batch
+  // queries call the plugin's single-ray functions (BatchPath::SingleCalls): every check but batch-calls judges
+  // intersect1 / occluded1, the functions every plugin has (docs/grading.md, "batch-calls").
   std::unique_ptr<IsolatedPluginBackend> launch(const LaunchLimits& limits) const;
 
   const std::filesystem::path& path() const { return path_; }  // absolute
   const std::string& name() const { return name_; }            // "plugin:NAME"
   const BackendTraits& traits() const { return traits_; }
+  // The optional batch entry points the plugin's table has (the batch-calls check's applicability).
+  bool has_intersect_batch() const { return intersect_batch_; }
+  bool has_occluded_batch() const { return occluded_batch_; }
 
  private:
   std::filesystem::path path_;
   std::string name_;
   BackendTraits traits_;
+  bool intersect_batch_ = false, occluded_batch_ = false;
 };
 
 struct FailureReport {

@@ -49,6 +49,8 @@ struct Scorecard {
   std::string plugin;         // absolute path of the plugin
   std::string plugin_name;    // "plugin:NAME"
   BackendTraits claims;       // what the plugin's flags claim
+  bool intersect_batch = false;  // the plugin has the optional batch entry points (the batch-calls check's
+  bool occluded_batch = false;   // applicability)
   std::string suite;          // suite name
   std::string suite_path;     // the suite's manifest
   std::vector<CheckResult> checks;

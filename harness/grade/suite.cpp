@@ -124,6 +124,7 @@ std::vector<std::string_view> parameters_of(Category c) {
     case Category::Performance: return {"rays", "count", "thresholds"};
     case Category::TreeQuality: return {"rays", "count", "thresholds"};
     case Category::DeepTree: return {"count", "reference", "origin"};
+    case Category::BatchCalls: return {"rays", "count", "reference"};
   }
   return {};
 }

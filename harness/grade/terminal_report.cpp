@@ -38,8 +38,13 @@ std::string terminal_header(const Scorecard& card, std::size_t checks) {
     budget += fmt::format("{} (--time-scale auto: the reference workload took {:.3f} s here, {:.3f} s on the reference "
                           "machine)", card.time_scale == 1.0 ? ", time limits x 1" : "",
                           card.time_calibration->measured_seconds, card.time_calibration->reference_seconds);
-  return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {}{})\n  the plugin claims: {}\n\n", card.plugin_name,
-                     card.plugin, card.suite, checks, card.suite_path, budget, claims_text(card.claims));
+  const std::string batch = card.intersect_batch && card.occluded_batch ? "intersect_batch, occluded_batch"
+                            : card.intersect_batch                       ? "intersect_batch"
+                            : card.occluded_batch                        ? "occluded_batch"
+                                                                         : "none";
+  return fmt::format("twinray grade: {} ({})\n  suite {} ({} checks, {}{})\n  the plugin claims: {}\n  batch functions: {}\n\n",
+                     card.plugin_name, card.plugin, card.suite, checks, card.suite_path, budget, claims_text(card.claims),
+                     batch);
 }
 
 std::string terminal_check_line(const CheckResult& c) {

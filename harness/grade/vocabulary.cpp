@@ -28,6 +28,7 @@ std::string_view to_string(Category c) {
     case Category::Performance: return "performance";
     case Category::TreeQuality: return "tree-quality";
     case Category::DeepTree: return "deep-tree";
+    case Category::BatchCalls: return "batch-calls";
   }
   return "?";
 }
@@ -64,6 +65,7 @@ bool is_correctness_category(Category c) {
     case Category::Spheres:
     case Category::Ties:
     case Category::DeepTree:
+    case Category::BatchCalls:
       return true;
     default:
       return false;

@@ -4,7 +4,7 @@
 //
 //   outcome     pass, fail, crash, timeout, skipped
 //   category    build, closest-hit, any-hit, ray-interval, axis-aligned, watertight, spheres, ties,
-//               thread-safety, determinism, performance, tree-quality, deep-tree
+//               thread-safety, determinism, performance, tree-quality, deep-tree, batch-calls
 //   visibility  visible, hidden, after_due_date, after_published (Gradescope's own four values)
 //   required    true, false, "if-claimed" (required only when the plugin claims the property: watertight,
 //               honours ties)
@@ -30,6 +30,7 @@ enum class Category {
   Performance,
   TreeQuality,
   DeepTree,
+  BatchCalls,  // the plugin's optional intersect_batch / occluded_batch; not applicable to a plugin without them
 };
 
 enum class Visibility { Visible, Hidden, AfterDueDate, AfterPublished };
@@ -40,7 +41,7 @@ inline constexpr Category kAllCategories[] = {
     Category::Build,       Category::ClosestHit,   Category::AnyHit,      Category::RayInterval,
     Category::AxisAligned, Category::Watertight,   Category::Spheres,     Category::Ties,
     Category::ThreadSafety, Category::Determinism, Category::Performance, Category::TreeQuality,
-    Category::DeepTree};
+    Category::DeepTree,    Category::BatchCalls};
 
 std::string_view to_string(Outcome o);
 std::string_view to_string(Category c);

@@ -40,6 +40,9 @@
  *   STOP          raises SIGSTOP on itself on a trigger ray (a debugging aid left in): the worker is stopped,
  *                 not dead, and must be cut by the ray's time limit
  *   CHATTY        prints a line on every query (debug output left in), and answers like the others
+ *   BATCH_SEGV, BATCH_LOOP  have intersect_batch and occluded_batch, which write through a null pointer / loop
+ *                 forever on the third ray of any call of three rays or more; their single-ray functions answer
+ *                 every ray (a miss): a bug only the batch path has (tests/test_grade_batch.cpp)
  *   STDOUT_TO_SHM dup2()s the worker's shared memory (descriptor 3) onto stdout in build and prints: the text
  *                 lands in the memory the worker answers through
  *
@@ -407,6 +410,44 @@ static int hostile_occluded1(const void* self, const twinray_ray* ray, twinray_q
   return 0;
 }
 
+#if defined(TWINRAY_HOSTILE_BATCH_SEGV) || defined(TWINRAY_HOSTILE_BATCH_LOOP)
+static void batch_misbehave(void) {
+#ifdef TWINRAY_HOSTILE_BATCH_SEGV
+  crash();
+#else
+  volatile unsigned long spins = 0;
+  for (;;) ++spins;
+#endif
+}
+
+static void hostile_intersect_batch(const void* self, const twinray_ray* rays, twinray_hit* hits, size_t count,
+                                    twinray_query_stats* stats) {
+  size_t i;
+  (void)self;
+  (void)rays;
+  (void)stats;
+  for (i = 0; i < count; ++i) {
+    if (i == 2) batch_misbehave();
+    hits[i].geom_id = TWINRAY_INVALID_ID;
+  }
+}
+
+static void hostile_occluded_batch(const void* self, const twinray_ray* rays, unsigned char* occluded, size_t count,
+                                   twinray_query_stats* stats) {
+  size_t i;
+  (void)self;
+  (void)rays;
+  (void)stats;
+  for (i = 0; i < count; ++i) {
+    if (i == 2) batch_misbehave();
+    occluded[i] = 0;
+  }
+}
+#define HOSTILE_BATCH_FUNCTIONS hostile_intersect_batch, hostile_occluded_batch
+#else
+#define HOSTILE_BATCH_FUNCTIONS NULL, NULL
+#endif
+
 #ifdef TWINRAY_HOSTILE_BUILD_ESCAPES
 #define HOSTILE_NAME "hostile\n\033[1mpass\xff"
 #else
@@ -414,7 +455,7 @@ static int hostile_occluded1(const void* self, const twinray_ray* ray, twinray_q
 #endif
 static const twinray_plugin_v1 hostile_table = {
     TWINRAY_PLUGIN_ABI_VERSION, HOSTILE_NAME, 0u, hostile_create, hostile_destroy, hostile_build,
-    hostile_intersect1,         hostile_occluded1, NULL, NULL, NULL,
+    hostile_intersect1,         hostile_occluded1, HOSTILE_BATCH_FUNCTIONS, NULL,
 };
 
 TWINRAY_PLUGIN_EXPORT const twinray_plugin_v1* twinray_plugin_entry(void) { return &hostile_table; }

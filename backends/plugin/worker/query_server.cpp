@@ -93,6 +93,8 @@ void QueryServer::serve(std::size_t index) {
       case Op::Build: run_build(c); break;
       case Op::Intersect: run_queries(c, true); break;
       case Op::Occluded: run_queries(c, false); break;
+      case Op::IntersectBatch: run_batch(c, true); break;
+      case Op::OccludedBatch: run_batch(c, false); break;
       case Op::Destroy: run_destroy(c);
       case Op::None: break;
     }
@@ -144,6 +146,48 @@ void QueryServer::run_queries(Channel& c, bool closest) {
         c.results[k].found = table.occluded1(self, &ray, &stats) != 0 ? 1 : 0;
       }
     }
+  });
+  c.nodes_visited = stats.nodes_visited;
+  c.primitives_tested = stats.primitives_tested;
+}
+
+void QueryServer::run_batch(Channel& c, bool closest) {
+  const std::uint32_t n = std::min<std::uint32_t>(c.count, static_cast<std::uint32_t>(kChunkRays));
+  const twinray_plugin_v1& table = plugin_->table();
+  const void* self = instance_for(c);
+  if (self == nullptr) return;
+  if (closest ? table.intersect_batch == nullptr : table.occluded_batch == nullptr) {
+    c.status = Status::SetupFailed;
+    copy_message(c.message, sizeof c.message, "a batch request for a plugin without that batch function");
+    return;
+  }
+  // The plugin's own copies of the rays and room for its answers: twinray does not touch the channel during
+  // the call, but the plugin gets private buffers as the in-process backend gives it (a stack array there).
+  twinray_ray rays[kBatchCallRays];
+  twinray_hit hits[kBatchCallRays];
+  unsigned char occluded[kBatchCallRays];
+  twinray_query_stats stats{};
+  guarded(c, [&] {
+    for (std::uint32_t begin = 0; begin < n; begin += static_cast<std::uint32_t>(kBatchCallRays)) {
+      const std::uint32_t count = std::min<std::uint32_t>(n - begin, static_cast<std::uint32_t>(kBatchCallRays));
+      c.current.store(begin, std::memory_order_relaxed);  // a crash or hang in this call is pinned to its first ray
+      std::memcpy(rays, c.rays + begin, count * sizeof(twinray_ray));
+      errno = 0;  // see crash_recorder.cpp
+      if (closest) {
+        for (std::uint32_t k = 0; k < count; ++k) hits[k] = miss();
+        table.intersect_batch(self, rays, hits, count, &stats);
+        for (std::uint32_t k = 0; k < count; ++k) {
+          c.results[begin + k].hit = hits[k];
+          c.results[begin + k].found = hits[k].geom_id != TWINRAY_INVALID_ID ? 1 : 0;
+        }
+      } else {
+        std::memset(occluded, 0, count);
+        table.occluded_batch(self, rays, occluded, count, &stats);
+        for (std::uint32_t k = 0; k < count; ++k) c.results[begin + k].found = occluded[k] != 0 ? 1 : 0;
+      }
+    }
+    // Answered: the request ends on its last ray, as a single-call request does (twinray checks it).
+    if (n > 0) c.current.store(n - 1, std::memory_order_relaxed);
   });
   c.nodes_visited = stats.nodes_visited;
   c.primitives_tested = stats.primitives_tested;

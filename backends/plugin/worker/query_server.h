@@ -35,6 +35,8 @@ class QueryServer {
   // is created (table.create) by the first Build addressed to it.
   void* instance_for(Channel& c);
   void run_queries(Channel& c, bool closest);
+  // The plugin's intersect_batch / occluded_batch over the request, in calls of kBatchCallRays rays.
+  void run_batch(Channel& c, bool closest);
   [[noreturn]] void run_destroy(Channel& c);
 
   ControlBlock& block_;

@@ -148,6 +148,8 @@ int main(int argc, char** argv) {
   const twinray_plugin_v1& table = plugin->table();
   copy_text(header.plugin_name, sizeof header.plugin_name, table.name);
   header.plugin_flags = table.flags;
+  header.batch_functions = (table.intersect_batch != nullptr ? pw::kHasIntersectBatch : 0u) |
+                           (table.occluded_batch != nullptr ? pw::kHasOccludedBatch : 0u);
   announce(header, pw::Startup::Ready);
   wait_for_twinray();
 }
