@@ -80,8 +80,9 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"before-tmin", "ray-interval-soup", Outcome::Fail, "answers wrong", "closest-soup"},
                       BugCase{"zero-direction", "axis-aligned-box", Outcome::Crash, "SIGSEGV", "closest-soup"},
                       BugCase{"infinite-loop", "axis-aligned-box", Outcome::Timeout, "", "closest-soup"},
-                      BugCase{"shared-stack", "thread-safety-soup", Outcome::Fail, "concurrent answers differ",
-                              "closest-soup"},
+                      // A race: threads sharing one stack answer wrong or crash, as they meet.
+                      BugCase{"shared-stack", "thread-safety-soup", Outcome::Fail,
+                              "concurrent answers differ|crashed", "closest-soup"},
                       BugCase{"anyhit-tmax", "any-hit-cornell", Outcome::Fail, "plugin says occluded", "closest-cornell"},
                       // Right primitive, right t: only the attributes give these away (hit_attributes.h).
                       BugCase{"swapped-uv", "closest-cornell", Outcome::Fail, "wrong attributes: u", "any-hit-cornell"},
@@ -547,9 +548,6 @@ TEST(GradePlugins, LazyBuildRacesInTheFirstConcurrentRound) {
   EXPECT_NE(lazy.outcome, Outcome::Pass) << terminal_check_line(lazy);
   EXPECT_EQ(lazy.points, 0.0);
   EXPECT_NE(lazy.reproduce.find("--check threads"), std::string::npos) << lazy.reproduce;
-  // The test build widens its race window (scotty_bvh.cpp, lazy_build_pause), so even a build of a fraction of
-  // a millisecond tears: the check fails it however the threads are scheduled.
-  EXPECT_NE(one(scotty_plugin("lazy-build"), "threads-small").outcome, Outcome::Pass);
   EXPECT_EQ(one(scotty_plugin(), "threads").outcome, Outcome::Pass);
   EXPECT_EQ(one(TWINRAY_TEST_BRUTE_PLUGIN, "threads-small").outcome, Outcome::Pass);
   std::filesystem::remove_all(suite);
