@@ -117,7 +117,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
       for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
         // t only: the winner's u, v are computed once, at the end, from its kept crossing.
-        intersect_triangle_block_closest(
+        bvh_leaf::block_closest(
             tri_ray, prims.block_of(slot), lane_mask(first + count - slot), ray.tmin, tmax,
             [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
               const PrimitiveKey key = prims.triangle_keys[slot + lane];
@@ -203,8 +203,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
         // Membership decided before the quotient where it can be (triangle_refine.h, certainly_inside).
-        found = intersect_triangle_block_any</*kDivisionFreeFirst=*/true>(tri_ray, prims.block_of(slot),
-                                                                         lane_mask(in_block), ray.tmin, ray.tmax) != 0;
+        found = bvh_leaf::block_any(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax);
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {
