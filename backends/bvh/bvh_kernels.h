@@ -36,5 +36,8 @@ BvhKernels kernels(bool triangles, bool spheres);
 namespace bvh_avx2 {
 BvhKernels kernels(bool triangles, bool spheres);
 }
+namespace bvh_avx512 {
+BvhKernels kernels(bool triangles, bool spheres);
+}
 
 }  // namespace twinray
