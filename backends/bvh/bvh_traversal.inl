@@ -80,6 +80,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
+  // The best hit so far in a local (t and ids), copied to `hit` at the end: `hit` is the caller's memory, and
+  // each candidate's tie test would otherwise read the t the previous one stored there (a store-to-load
+  // forwarding on the chain to tmax).
+  Hit best;
   const BoxRay box_ray(ray);
   [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
@@ -121,10 +125,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
             tri_ray, prims.block_of(slot), lane_mask(first + count - slot), ray.tmin, tmax,
             [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
               const PrimitiveKey key = prims.triangle_keys[slot + lane];
-              if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
-              hit.t = tmax = t;
-              hit.geom_id = key.geom_id;
-              hit.prim_id = key.prim_id;
+              if (!precedes(t, key.geom_id, key.prim_id, best)) return tmax;
+              best.t = tmax = t;
+              best.geom_id = key.geom_id;
+              best.prim_id = key.prim_id;
               best_is_sphere = false;
               best_index = slot + lane;
               best_crossing_kept = crossing != nullptr;
@@ -138,10 +142,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         float t;
         if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
         const PrimitiveKey key = prims.sphere_keys[i];
-        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
-        hit.t = tmax = t;
-        hit.geom_id = key.geom_id;
-        hit.prim_id = key.prim_id;
+        if (!precedes(t, key.geom_id, key.prim_id, best)) continue;
+        best.t = tmax = t;
+        best.geom_id = key.geom_id;
+        best.prim_id = key.prim_id;
         best_is_sphere = true;
         best_index = i;
       }
@@ -156,7 +160,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     stats->nodes_visited += nodes_visited;
     stats->primitives_tested += prims_tested;
   }
-  if (!hit.found()) return false;
+  if (!best.found()) return false;
+  hit.t = best.t;
+  hit.geom_id = best.geom_id;
+  hit.prim_id = best.prim_id;
   if (kSpheres && best_is_sphere) {
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
