@@ -73,7 +73,7 @@ TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
 // Always inlined into its one caller per instantiation (the kernel below, or a traced query), so that the
 // kernels compile to the code they had before observers existed.
-template <bool kTriangles, bool kSpheres, typename Observer>
+template <bool kTriangles, bool kSpheres, typename Observer, bool kCount = true>
 TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed(const BvhView& bvh, const Ray& ray,
                                                                                 Hit& hit, QueryStats* stats,
                                                                                 const Observer& observer) {
@@ -156,7 +156,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     more = pop_next(stack, size, tmax, index);
   }
 
-  if (stats) {
+  if (kCount && stats) {
     stats->nodes_visited += nodes_visited;
     stats->primitives_tested += prims_tested;
   }
@@ -175,7 +175,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres, typename Observer>
+template <bool kTriangles, bool kSpheres, typename Observer, bool kCount = true>
 TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(const BvhView& bvh, const Ray& ray,
                                                                                QueryStats* stats,
                                                                                const Observer& observer) {
@@ -223,20 +223,27 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
     more = pop_next(stack, size, ray.tmax, index);
   }
 
-  if (stats) {
+  if (kCount && stats) {
     stats->nodes_visited += nodes_visited;
     stats->primitives_tested += prims_tested;
   }
   return found;
 }
 
-// The kernels (BvhKernels): the traversals above without an observer.
+// The kernels (BvhKernels): the traversals above without an observer, and without the node and primitive
+// counters when no QueryStats is given (every query but the statistics passes): the two counters are
+// general-purpose registers that the traversal loop otherwise keeps in memory, beside the stack's size.
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  if (stats == nullptr)
+    return bvh_intersect_observed<kTriangles, kSpheres, NoVisitObserver, false>(bvh, ray, hit, nullptr,
+                                                                                NoVisitObserver{});
   return bvh_intersect_observed<kTriangles, kSpheres>(bvh, ray, hit, stats, NoVisitObserver{});
 }
 
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  if (stats == nullptr)
+    return bvh_occluded_observed<kTriangles, kSpheres, NoVisitObserver, false>(bvh, ray, nullptr, NoVisitObserver{});
   return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
 }
