@@ -4,7 +4,7 @@
 #include "backends/bvh/bvh_kernels.h"
 
 #include "backends/bvh/ray_box.h"
-#include "backends/bvh/triangle_block.h"
+#include "backends/bvh/bvh_leaf.h"
 #include "core/intersect/sphere_robust.h"
 #include "core/intersect/triangle_watertight.h"
 

@@ -73,13 +73,17 @@ TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t
 // Closest hit; fills `hit` completely (t, u, v, ids, normal) or leaves it a miss. The ray must be valid.
 // Always inlined into its one caller per instantiation (the kernel below, or a traced query), so that the
 // kernels compile to the code they had before observers existed.
-template <bool kTriangles, bool kSpheres, typename Observer>
+template <bool kTriangles, bool kSpheres, typename Observer, bool kCount = true>
 TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed(const BvhView& bvh, const Ray& ray,
                                                                                 Hit& hit, QueryStats* stats,
                                                                                 const Observer& observer) {
   using namespace bvh_detail;
   hit = Hit{};
   if (bvh.nodes.empty()) return false;
+  // The best hit so far in a local (t and ids), copied to `hit` at the end: `hit` is the caller's memory, and
+  // each candidate's tie test would otherwise read the t the previous one stored there (a store-to-load
+  // forwarding on the chain to tmax).
+  Hit best;
   const BoxRay box_ray(ray);
   [[maybe_unused]] const TriangleRay tri_ray = make_triangle_ray(ray.org, ray.dir);
   const PrimitiveStore& prims = *bvh.prims;
@@ -117,14 +121,14 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     if (kTriangles && (!kSpheres || !node.is_sphere_leaf())) {
       for (std::uint32_t slot = first; slot < first + count; slot += kTriangleBlockLanes) {
         // t only: the winner's u, v are computed once, at the end, from its kept crossing.
-        intersect_triangle_block_closest(
+        bvh_leaf::block_closest(
             tri_ray, prims.block_of(slot), lane_mask(first + count - slot), ray.tmin, tmax,
             [&](unsigned lane, float t, const refine_detail::Crossing* crossing) {
               const PrimitiveKey key = prims.triangle_keys[slot + lane];
-              if (!precedes(t, key.geom_id, key.prim_id, hit)) return tmax;
-              hit.t = tmax = t;
-              hit.geom_id = key.geom_id;
-              hit.prim_id = key.prim_id;
+              if (!precedes(t, key.geom_id, key.prim_id, best)) return tmax;
+              best.t = tmax = t;
+              best.geom_id = key.geom_id;
+              best.prim_id = key.prim_id;
               best_is_sphere = false;
               best_index = slot + lane;
               best_crossing_kept = crossing != nullptr;
@@ -138,10 +142,10 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         float t;
         if (!intersect_sphere(ray.org, ray.dir, s.center, s.radius, ray.tmin, tmax, t)) continue;
         const PrimitiveKey key = prims.sphere_keys[i];
-        if (!precedes(t, key.geom_id, key.prim_id, hit)) continue;
-        hit.t = tmax = t;
-        hit.geom_id = key.geom_id;
-        hit.prim_id = key.prim_id;
+        if (!precedes(t, key.geom_id, key.prim_id, best)) continue;
+        best.t = tmax = t;
+        best.geom_id = key.geom_id;
+        best.prim_id = key.prim_id;
         best_is_sphere = true;
         best_index = i;
       }
@@ -152,11 +156,14 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     more = pop_next(stack, size, tmax, index);
   }
 
-  if (stats) {
+  if (kCount && stats) {
     stats->nodes_visited += nodes_visited;
     stats->primitives_tested += prims_tested;
   }
-  if (!hit.found()) return false;
+  if (!best.found()) return false;
+  hit.t = best.t;
+  hit.geom_id = best.geom_id;
+  hit.prim_id = best.prim_id;
   if (kSpheres && best_is_sphere) {
     const StoredSphere& s = prims.spheres[best_index];
     sphere_hit_attributes(ray.org, ray.dir, hit.t, s.center, s.radius, hit.ng, hit.u, hit.v);
@@ -168,7 +175,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
 }
 
 // Any hit: returns at the first primitive hit in [tmin, tmax]. The ray must be valid.
-template <bool kTriangles, bool kSpheres, typename Observer>
+template <bool kTriangles, bool kSpheres, typename Observer, bool kCount = true>
 TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(const BvhView& bvh, const Ray& ray,
                                                                                QueryStats* stats,
                                                                                const Observer& observer) {
@@ -203,8 +210,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
         const std::uint32_t in_block = std::min(first + count - slot, kTriangleBlockLanes);
         prims_tested += in_block;
         // Membership decided before the quotient where it can be (triangle_refine.h, certainly_inside).
-        found = intersect_triangle_block_any</*kDivisionFreeFirst=*/true>(tri_ray, prims.block_of(slot),
-                                                                         lane_mask(in_block), ray.tmin, ray.tmax) != 0;
+        found = bvh_leaf::block_any(tri_ray, prims.block_of(slot), lane_mask(in_block), ray.tmin, ray.tmax);
       }
     } else if constexpr (kSpheres) {
       for (std::uint32_t i = first; i < first + count && !found; ++i) {
@@ -217,20 +223,27 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_occluded_observed(
     more = pop_next(stack, size, ray.tmax, index);
   }
 
-  if (stats) {
+  if (kCount && stats) {
     stats->nodes_visited += nodes_visited;
     stats->primitives_tested += prims_tested;
   }
   return found;
 }
 
-// The kernels (BvhKernels): the traversals above without an observer.
+// The kernels (BvhKernels): the traversals above without an observer, and without the node and primitive
+// counters when no QueryStats is given (every query but the statistics passes): the two counters are
+// general-purpose registers that the traversal loop otherwise keeps in memory, beside the stack's size.
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool bvh_intersect(const BvhView& bvh, const Ray& ray, Hit& hit, QueryStats* stats) {
+  if (stats == nullptr)
+    return bvh_intersect_observed<kTriangles, kSpheres, NoVisitObserver, false>(bvh, ray, hit, nullptr,
+                                                                                NoVisitObserver{});
   return bvh_intersect_observed<kTriangles, kSpheres>(bvh, ray, hit, stats, NoVisitObserver{});
 }
 
 template <bool kTriangles, bool kSpheres>
 TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats* stats) {
+  if (stats == nullptr)
+    return bvh_occluded_observed<kTriangles, kSpheres, NoVisitObserver, false>(bvh, ray, nullptr, NoVisitObserver{});
   return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
 }
