@@ -22,10 +22,4 @@ namespace twinray::bvh_sse2 {
 #undef TWINRAY_BOX_PAIR_RAY
 #undef TWINRAY_KERNEL
 
-BvhKernels kernels(bool triangles, bool spheres) {
-  if (triangles && spheres) return {&bvh_intersect<true, true>, &bvh_occluded<true, true>};
-  if (spheres) return {&bvh_intersect<false, true>, &bvh_occluded<false, true>};
-  return {&bvh_intersect<true, false>, &bvh_occluded<true, false>};
-}
-
 }  // namespace twinray::bvh_sse2

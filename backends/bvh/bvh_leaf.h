@@ -22,23 +22,8 @@ using triangle_block_detail::EdgeLanes;
 // underflowed went to decide_in_double before and is a candidate here; its edge functions are non-zero and
 // not NaN, so their signs are exact (triangle_watertight.h) and the scalar test decided it alike.
 [[gnu::always_inline]] inline EdgeLanes edge_test(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes) {
-  const auto row = [&](int vert, std::ptrdiff_t axis) { return _mm_load_ps(block.v[vert][axis]); };
-  const __m128 ox = _mm_set1_ps(ray.ox), oy = _mm_set1_ps(ray.oy), oz = _mm_set1_ps(ray.oz);
-  const __m128 sx = _mm_set1_ps(ray.sx), sy = _mm_set1_ps(ray.sy);
-
-  const __m128 a_z = _mm_sub_ps(row(0, ray.kz), oz);
-  const __m128 b_z = _mm_sub_ps(row(1, ray.kz), oz);
-  const __m128 c_z = _mm_sub_ps(row(2, ray.kz), oz);
-  const __m128 ax = _mm_sub_ps(_mm_sub_ps(row(0, ray.kx), ox), _mm_mul_ps(sx, a_z));
-  const __m128 ay = _mm_sub_ps(_mm_sub_ps(row(0, ray.ky), oy), _mm_mul_ps(sy, a_z));
-  const __m128 bx = _mm_sub_ps(_mm_sub_ps(row(1, ray.kx), ox), _mm_mul_ps(sx, b_z));
-  const __m128 by = _mm_sub_ps(_mm_sub_ps(row(1, ray.ky), oy), _mm_mul_ps(sy, b_z));
-  const __m128 cx = _mm_sub_ps(_mm_sub_ps(row(2, ray.kx), ox), _mm_mul_ps(sx, c_z));
-  const __m128 cy = _mm_sub_ps(_mm_sub_ps(row(2, ray.ky), oy), _mm_mul_ps(sy, c_z));
-
-  const __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-  const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-  const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+  const triangle_block_detail::EdgeFunctions e = triangle_block_detail::edge_functions(ray, block);
+  const __m128 u = e.u, v = e.v, w = e.w;
 
   // Undecided: a zero (== 0) or a NaN (unordered) edge function. Independent compares, one level of ORs.
   const __m128 zero = _mm_setzero_ps();

@@ -247,3 +247,10 @@ TWINRAY_KERNEL bool bvh_occluded(const BvhView& bvh, const Ray& ray, QueryStats*
     return bvh_occluded_observed<kTriangles, kSpheres, NoVisitObserver, false>(bvh, ray, nullptr, NoVisitObserver{});
   return bvh_occluded_observed<kTriangles, kSpheres>(bvh, ray, stats, NoVisitObserver{});
 }
+
+// This unit's entry in bvh_kernels.h: the kernels for the primitive kinds a scene has.
+BvhKernels kernels(bool triangles, bool spheres) {
+  if (triangles && spheres) return {&bvh_intersect<true, true>, &bvh_occluded<true, true>};
+  if (spheres) return {&bvh_intersect<false, true>, &bvh_occluded<false, true>};
+  return {&bvh_intersect<true, false>, &bvh_occluded<true, false>};
+}

@@ -56,7 +56,13 @@ struct EdgeLanes {
   unsigned candidates, exact_zero;
 };
 
-[[gnu::always_inline]] inline EdgeLanes edge_test(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes) {
+// The three edge functions of the watertight test for the block's four lanes, in float (triangle_watertight.h:
+// the vertices relative to the origin, sheared so that the ray runs along +z).
+struct EdgeFunctions {
+  __m128 u, v, w;
+};
+
+[[gnu::always_inline]] inline EdgeFunctions edge_functions(const TriangleRay& ray, const TriangleBlock& block) {
   const auto row = [&](int vert, std::ptrdiff_t axis) { return _mm_load_ps(block.v[vert][axis]); };
   const __m128 ox = _mm_set1_ps(ray.ox), oy = _mm_set1_ps(ray.oy), oz = _mm_set1_ps(ray.oz);
   const __m128 sx = _mm_set1_ps(ray.sx), sy = _mm_set1_ps(ray.sy);
@@ -74,6 +80,12 @@ struct EdgeLanes {
   const __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
   const __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
   const __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+  return {u, v, w};
+}
+
+[[gnu::always_inline]] inline EdgeLanes edge_test(const TriangleRay& ray, const TriangleBlock& block, unsigned lanes) {
+  const EdgeFunctions e = edge_functions(ray, block);
+  const __m128 u = e.u, v = e.v, w = e.w;
 
   // The scalar test's detour (triangle_detail::needs_double): an edge function exactly 0, or NaN (products
   // that overflowed, far out in float's range). Then the product u v w is 0 or NaN, which 0 < |u v w| rejects

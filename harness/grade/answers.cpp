@@ -192,4 +192,12 @@ bool same_bits(const Hit& a, const Hit& b) {
          bits(a.ng.z) == bits(b.ng.z);
 }
 
+std::string summary_of_allowed(const Judgement& j) {
+  std::string s;
+  if (j.edge) s += fmt::format(", {} edge", j.edge);
+  if (j.tie) s += fmt::format(", {} tie", j.tie);
+  if (j.overruled) s += fmt::format(", {} where {} arithmetic overruled the reference", j.overruled, j.second_opinion);
+  return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
+}
+
 }  // namespace twinray::grade

@@ -71,6 +71,9 @@ struct JudgeOptions {
 Judgement judge(GradeScene& scene, std::span<const Ray> rays, const Answers& plugin, const Answers& reference,
                 const JudgeOptions& options);
 
+// " (disagreements allowed: 3 edge, 1 tie)" for a check's detail, or "" when every answer agreed.
+std::string summary_of_allowed(const Judgement& j);
+
 // "geom 0 prim 12 at t 2.5 (0x1.4p+1)" or "a miss".
 std::string describe_hit(const Hit& hit);
 

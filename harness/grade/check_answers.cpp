@@ -101,14 +101,6 @@ RaySet rays_for(CheckContext& ctx) {
   return set;
 }
 
-std::string summary_of_allowed(const Judgement& j) {
-  std::string s;
-  if (j.edge) s += fmt::format(", {} edge", j.edge);
-  if (j.tie) s += fmt::format(", {} tie", j.tie);
-  if (j.overruled) s += fmt::format(", {} where {} arithmetic overruled the reference", j.overruled, j.second_opinion);
-  return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
-}
-
 }  // namespace
 
 CheckVerdict run_answer_check(CheckContext& ctx) {

@@ -58,14 +58,6 @@ std::vector<Batch> cut_into_batches(std::size_t n) {
   return batches;
 }
 
-std::string summary_of_allowed(const Judgement& j) {
-  std::string s;
-  if (j.edge) s += fmt::format(", {} edge", j.edge);
-  if (j.tie) s += fmt::format(", {} tie", j.tie);
-  if (j.overruled) s += fmt::format(", {} where {} arithmetic overruled the reference", j.overruled, j.second_opinion);
-  return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
-}
-
 }  // namespace
 
 CheckVerdict run_batch_check(CheckContext& ctx) {
