@@ -200,4 +200,21 @@ std::string summary_of_allowed(const Judgement& j) {
   return s.empty() ? "" : " (disagreements allowed:" + s.substr(1) + ")";
 }
 
+nlohmann::json judgement_figures(const Judgement& j, std::size_t rays, std::size_t answers, std::size_t wrong,
+                                 const std::string& reference) {
+  return {{"rays", rays},
+          {"answers", answers},
+          {"wrong", wrong},
+          {"wrong_closest", j.wrong_closest},
+          {"wrong_any", j.wrong_any},
+          {"wrong_attributes", j.wrong_attributes},
+          {"edge", j.edge},
+          {"tie", j.tie},
+          {"overruled", j.overruled},
+          {"unarbitrated", j.unarbitrated},
+          {"ruled", j.ruled},
+          {"reference", reference},
+          {"second_opinion", j.second_opinion}};
+}
+
 }  // namespace twinray::grade

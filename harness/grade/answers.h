@@ -16,6 +16,8 @@
 #include "core/backend/backend.h"
 #include "harness/grade/grade_scene.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -70,6 +72,11 @@ struct JudgeOptions {
 
 Judgement judge(GradeScene& scene, std::span<const Ray> rays, const Answers& plugin, const Answers& reference,
                 const JudgeOptions& options);
+
+// The figures every answer check reports of its judgement (the JSON report's per-check "figures"): `rays`,
+// `answers`, `wrong` (all wrong answers the check counts, `j`'s and any others) and j's counts by kind.
+nlohmann::json judgement_figures(const Judgement& j, std::size_t rays, std::size_t answers, std::size_t wrong,
+                                 const std::string& reference);
 
 // " (disagreements allowed: 3 edge, 1 tie)" for a check's detail, or "" when every answer agreed.
 std::string summary_of_allowed(const Judgement& j);

@@ -141,19 +141,7 @@ CheckVerdict run_answer_check(CheckContext& ctx) {
   const std::size_t answers = set.rays.size() * (set.queries == Queries::Both ? 2 : 1);
   CheckVerdict v;
   v.passed = j.wrong_total() == 0 && ends.wrong == 0 && second_wrong == 0;
-  v.figures = {{"rays", set.rays.size()},
-               {"answers", answers},
-               {"wrong", j.wrong_total() + ends.wrong},
-               {"wrong_closest", j.wrong_closest},
-               {"wrong_any", j.wrong_any},
-               {"wrong_attributes", j.wrong_attributes},
-               {"edge", j.edge},
-               {"tie", j.tie},
-               {"overruled", j.overruled},
-               {"unarbitrated", j.unarbitrated},
-               {"ruled", j.ruled},
-               {"reference", reference},
-               {"second_opinion", j.second_opinion}};
+  v.figures = judgement_figures(j, set.rays.size(), answers, j.wrong_total() + ends.wrong, reference);
   if (second_j) {
     v.figures["second_instance_rays"] = second_set.rays.size();
     v.figures["second_instance_wrong"] = second_wrong;

@@ -131,23 +131,11 @@ CheckVerdict run_batch_check(CheckContext& ctx) {
   if (occluded_batch) functions.push_back("occluded_batch");
   CheckVerdict v;
   v.passed = wrong == 0;
-  v.figures = {{"rays", rays.size()},
-               {"answers", answers},
-               {"wrong", wrong},
-               {"wrong_closest", j.wrong_closest},
-               {"wrong_any", j.wrong_any},
-               {"wrong_attributes", j.wrong_attributes},
-               {"edge", j.edge},
-               {"tie", j.tie},
-               {"overruled", j.overruled},
-               {"unarbitrated", j.unarbitrated},
-               {"ruled", j.ruled},
-               {"reference", reference},
-               {"second_opinion", j.second_opinion},
-               {"interval_end_rays", ends.size()},
-               {"wrong_interval_ends", end_j.wrong},
-               {"batches", batches.size()},
-               {"functions", functions}};
+  v.figures = judgement_figures(j, rays.size(), answers, wrong, reference);
+  v.figures["interval_end_rays"] = ends.size();
+  v.figures["wrong_interval_ends"] = end_j.wrong;
+  v.figures["batches"] = batches.size();
+  v.figures["functions"] = functions;
   const std::string called = "through " + (functions.size() == 2 ? functions[0] + " and " + functions[1] : functions.at(0));
   if (v.passed) {
     v.detail = fmt::format("all {} answers {} right, in {} batches of 1 to {} rays{}", answers, called, batches.size(),
