@@ -6,10 +6,12 @@
 #include "backends/plugin/isolated_plugin_backend.h"
 #include "backends/plugin/plugin_backend.h"
 #include "core/geometry/hit.h"
+#include "core/scene/procedural.h"
 #include "core/sampling/rng.h"
 #include "harness/grade/grade_run.h"
 #include "harness/grade/reports.h"
 #include "tests/grade_test_util.h"
+#include "tests/plugin_failure_test_util.h"
 #include "tests/ray_test_util.h"
 
 #include <gtest/gtest.h>
@@ -24,6 +26,7 @@ namespace batch_test {  // named: the unity build puts several test files into o
 
 using testing::check_lines;
 using testing::check_named;
+using test::failure_of;
 
 std::filesystem::path bvh4_plugin(const std::string& bug = "") {
   return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
@@ -37,24 +40,9 @@ PluginLimits short_limits() {
   return limits;
 }
 
-// A 16x16 grid of unit squares in z = 0 and rays at it from above and beside it: hits and misses.
-SceneGeometry grid_scene() {
-  SceneGeometry g;
-  TriangleMesh grid;
-  grid.geom_id = 0;
-  const int n = 16;
-  for (int y = 0; y <= n; ++y)
-    for (int x = 0; x <= n; ++x) grid.positions.emplace_back(static_cast<float>(x), static_cast<float>(y), 0.0f);
-  for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) {
-      const auto v = static_cast<std::uint32_t>(y * (n + 1) + x);
-      grid.indices.emplace_back(v, v + 1, v + n + 2);
-      grid.indices.emplace_back(v, v + n + 2, v + n + 1);
-    }
-  grid.positions.reserve(grid.positions.size() + 1);  // readable bytes past the last vertex (the ABI's promise)
-  g.meshes.push_back(std::move(grid));
-  return g;
-}
+// A 16x16 grid of unit squares in z = 0 (core's grid_mesh, which leaves readable bytes past the last vertex as
+// the ABI promises) and rays at it from above and beside it: hits and misses.
+SceneGeometry grid_scene() { return grid_mesh(16, 16); }
 
 std::vector<Ray> grid_rays(std::size_t count) {
   Rng rng(7, 3);
@@ -66,16 +54,6 @@ std::vector<Ray> grid_rays(std::size_t count) {
     rays.push_back(test::make_ray(org, dir, 0.0f, i % 3 == 0 ? 2.5f : std::numeric_limits<float>::infinity()));
   }
   return rays;
-}
-
-template <typename F>
-std::optional<PluginFailure> failure_of(F&& call) {
-  try {
-    call();
-  } catch (const PluginFailure& f) {
-    return f;
-  }
-  return std::nullopt;
 }
 
 // The worker's batch path gives the in-process backend's answers to the bit (same functions, same call sizes),

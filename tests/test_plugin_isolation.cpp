@@ -10,6 +10,7 @@
 #include "cli_runner.h"
 #include "core/sampling/rng.h"
 #include "core/util/input_error.h"
+#include "plugin_failure_test_util.h"
 #include "ray_test_util.h"
 
 #include <gtest/gtest.h>
@@ -28,6 +29,7 @@
 namespace twinray {
 namespace {
 
+using test::failure_of;
 using test::make_ray;
 using test::same_bits;
 
@@ -120,17 +122,6 @@ bool same_hit_bits(const Hit& a, const Hit& b) {
 }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
-
-// Runs `call`, which must throw a PluginFailure, and returns it.
-template <typename F>
-std::optional<PluginFailure> failure_of(F&& call) {
-  try {
-    call();
-  } catch (const PluginFailure& f) {
-    return f;
-  }
-  return std::nullopt;
-}
 
 // ---- correct plugins through the worker ----------------------------------------------------------------------
 
