@@ -39,7 +39,7 @@ bool BvhBackend::intersect_traced(const Ray& ray, Hit& hit, std::vector<BvhVisit
   if (stats) ++stats->queries;
   hit = Hit{};
   if (!is_valid_ray(ray) || nodes_.empty()) return false;
-  const BvhView view{nodes_, &prims_};
+  const BvhView view{nodes_, &prims_, min_keys_.data()};
   const RecordingObserver observer{&visits};
   const bool triangles = !prims_.triangle_keys.empty(), spheres = !prims_.spheres.empty();
   if (triangles && spheres) return bvh_intersect_observed<true, true>(view, ray, hit, stats, observer);
@@ -52,7 +52,7 @@ bool BvhBackend::occluded_traced(const Ray& ray, std::vector<BvhVisit>& visits, 
   visits.clear();
   if (stats) ++stats->queries;
   if (!is_valid_ray(ray) || nodes_.empty()) return false;
-  const BvhView view{nodes_, &prims_};
+  const BvhView view{nodes_, &prims_, min_keys_.data()};
   const RecordingObserver observer{&visits};
   const bool triangles = !prims_.triangle_keys.empty(), spheres = !prims_.spheres.empty();
   if (triangles && spheres) return bvh_occluded_observed<true, true>(view, ray, stats, observer);

@@ -46,6 +46,28 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
   return false;
 }
 
+// pop_next for closest hit, with the tie rule's boxes: a box entered exactly at tmax (its entry == tmax, the best
+// t so far) is visited only when a primitive below it has a lower tie key than the best hit (`best_key`).
+// Proof that the skip loses nothing: `entry` is a float at most the exact entry of the ray into the box
+// within [tmin, tmax] (ray_box.h); a triangle below the box is crossed, if at all, at an exact t* inside the
+// box, so t* >= entry, and its reported t = fl32(t*) (correctly rounded, triangle_refine.h) is >= entry too,
+// since entry is a float and rounding is monotonic. So with entry == tmax == best t every hit below has
+// t >= best t, and `precedes` takes it only at t == best t with a lower (geom_id, prim_id): impossible when
+// min_keys[node] >= best_key. Subtrees with a sphere have min key 0 (bvh_backend.cpp) and are always entered;
+// before the first hit best_key is the miss's, above every key, so nothing is skipped that the ray's own
+// tmax admits. Same answers as pop_next; the common path (entry < tmax) is one compare, as there.
+TWINRAY_KERNEL inline bool pop_closest(const StackEntry* stack, std::size_t& size, float tmax,
+                                       const std::uint64_t* min_keys, std::uint64_t best_key, std::uint32_t& node) {
+  while (size > 0) {
+    const StackEntry& e = stack[--size];
+    if (e.entry < tmax || (e.entry == tmax && min_keys[e.node] < best_key)) {
+      node = e.node;
+      return true;
+    }
+  }
+  return false;
+}
+
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
 TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index,
                                    const TWINRAY_BOX_PAIR_RAY& pair_ray, StackEntry* stack, std::size_t& size,
@@ -94,6 +116,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   float tmax = ray.tmax;          // shrinks to the best hit's t
   bool best_is_sphere = false;
   std::uint32_t best_index = 0;   // into the store's array of the best hit's kind
+  std::uint64_t best_key = tie_key(kInvalidId, kInvalidId);  // of `best`, for pop_closest
   // The best triangle's crossing as its t test computed it, for its u, v at the end (triangle_block.h).
   [[maybe_unused]] refine_detail::Crossing best_crossing;
   [[maybe_unused]] bool best_crossing_kept = false;
@@ -113,7 +136,8 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, tmax, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) ||
+             pop_closest(stack, size, tmax, bvh.min_keys, best_key, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -129,6 +153,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
               best.t = tmax = t;
               best.geom_id = key.geom_id;
               best.prim_id = key.prim_id;
+              best_key = tie_key(key.geom_id, key.prim_id);
               best_is_sphere = false;
               best_index = slot + lane;
               best_crossing_kept = crossing != nullptr;
@@ -146,6 +171,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         best.t = tmax = t;
         best.geom_id = key.geom_id;
         best.prim_id = key.prim_id;
+        best_key = tie_key(key.geom_id, key.prim_id);
         best_is_sphere = true;
         best_index = i;
       }
@@ -153,7 +179,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
     // the AVX broadcast could not be inlined there. One broadcast per leaf.
     pair_ray.set_tmax(tmax);
-    more = pop_next(stack, size, tmax, index);
+    more = pop_closest(stack, size, tmax, bvh.min_keys, best_key, index);
   }
 
   if (kCount && stats) {
