@@ -11,7 +11,9 @@
 #include "core/intersect/triangle_watertight.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 
 namespace twinray {
