@@ -9,33 +9,6 @@
 
 namespace twinray {
 
-namespace {
-
-// BvhView::min_keys. Depth-first order puts both children after their parent, so one backward pass sees
-// every child before its parent. A sphere leaf gets 0 (never skipped on a tie): the skip rule's proof uses
-// the triangles' correctly rounded t (bvh_traversal.inl, pop_closest), which sphere t does not promise.
-std::vector<std::uint64_t> subtree_min_keys(std::span<const BvhNode> nodes, const PrimitiveStore& prims) {
-  std::vector<std::uint64_t> keys(nodes.size());
-  for (std::size_t i = nodes.size(); i-- > 0;) {
-    const BvhNode& node = nodes[i];
-    if (!node.is_leaf()) {
-      keys[i] = std::min(keys[i + 1], keys[node.second_child()]);
-      continue;
-    }
-    if (node.is_sphere_leaf()) {
-      keys[i] = 0;
-      continue;
-    }
-    std::uint64_t lowest = ~std::uint64_t{0};
-    for (std::uint32_t slot = node.first_prim(); slot < node.first_prim() + node.prim_count(); ++slot)
-      lowest = std::min(lowest, tie_key(prims.triangle_keys[slot].geom_id, prims.triangle_keys[slot].prim_id));
-    keys[i] = lowest;
-  }
-  return keys;
-}
-
-}  // namespace
-
 BvhBackend::BvhBackend(const BvhBuildOptions& options, std::optional<Isa> isa)
     : options_(options), isa_(isa ? *isa : selected_isa()) {
   validate(options_);
@@ -59,7 +32,6 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   for (BvhNode& node : tree.nodes)
     if (node.is_leaf()) node.offset = offsets[next_leaf++];
   nodes_.assign(tree.nodes.begin(), tree.nodes.end());  // exact size: tree.nodes keeps the gapped tree's capacity
-  min_keys_ = subtree_min_keys(nodes_, prims_);
 
   const bool has_triangles = n_triangles > 0, has_spheres = geometry.has_spheres();
   kernels_ = has_triangles || has_spheres ? bvh_kernels(isa_, has_triangles, has_spheres) : BvhKernels{};
@@ -73,7 +45,7 @@ void BvhBackend::build(const SceneGeometry& geometry) {
   stats_.leaves = tree.leaves;
   stats_.max_depth = tree.max_depth;
   stats_.sah_cost = tree_cost;
-  stats_.memory_bytes = nodes_.capacity() * sizeof(BvhNode) + min_keys_.capacity() * sizeof(std::uint64_t) + prims_.memory_bytes();
+  stats_.memory_bytes = nodes_.capacity() * sizeof(BvhNode) + prims_.memory_bytes();
   stats_.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -87,13 +59,13 @@ bool BvhBackend::intersect(const Ray& ray, Hit& hit, QueryStats* stats) const {
     hit = Hit{};
     return false;
   }
-  return kernels_.intersect(BvhView{nodes_, &prims_, min_keys_.data()}, ray, hit, stats);
+  return kernels_.intersect(BvhView{nodes_, &prims_}, ray, hit, stats);
 }
 
 bool BvhBackend::occluded(const Ray& ray, QueryStats* stats) const {
   if (stats) ++stats->queries;
   if (!is_valid_ray(ray)) return false;
-  return kernels_.occluded != nullptr && kernels_.occluded(BvhView{nodes_, &prims_, min_keys_.data()}, ray, stats);
+  return kernels_.occluded != nullptr && kernels_.occluded(BvhView{nodes_, &prims_}, ray, stats);
 }
 
 void BvhBackend::intersect(std::span<const Ray> rays, std::span<Hit> hits, QueryStats* stats) const {

@@ -57,7 +57,6 @@ class BvhBackend final : public Backend {
   Isa isa_;
   BvhKernels kernels_;  // null until build() saw at least one primitive
   std::vector<BvhNode> nodes_;
-  std::vector<std::uint64_t> min_keys_;  // BvhView::min_keys
   PrimitiveStore prims_;
   BuildStats stats_;
 };

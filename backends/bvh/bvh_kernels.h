@@ -21,17 +21,7 @@ namespace twinray {
 struct BvhView {
   std::span<const BvhNode> nodes;
   const PrimitiveStore* prims;
-  // Per node, the lowest tie key (tie_key) of the primitives below it, or 0 when any of them is a sphere:
-  // closest hit skips a popped box entered exactly at the best t when no key below it can win the tie
-  // (bvh_traversal.inl, pop_closest). Parallel to `nodes`.
-  const std::uint64_t* min_keys;
 };
-
-// The tie order of precedes (hit.h) at equal t as one integer: (geom_id, prim_id) lexicographically. A miss
-// (kInvalidId, kInvalidId) is the largest key, above every primitive's.
-inline std::uint64_t tie_key(std::uint32_t geom_id, std::uint32_t prim_id) {
-  return (static_cast<std::uint64_t>(geom_id) << 32) | prim_id;
-}
 
 // Closest hit (fills `hit` completely or leaves it a miss) and any hit, for a valid ray.
 struct BvhKernels {

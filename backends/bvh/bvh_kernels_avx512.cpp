@@ -10,9 +10,7 @@
 #include "core/intersect/triangle_watertight.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
-#include <limits>
 #include <type_traits>
 
 namespace twinray::bvh_avx512 {

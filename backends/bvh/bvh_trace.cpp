@@ -11,9 +11,7 @@
 #include "core/intersect/triangle_watertight.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdint>
-#include <limits>
 #include <type_traits>
 
 namespace twinray {
@@ -41,7 +39,7 @@ bool BvhBackend::intersect_traced(const Ray& ray, Hit& hit, std::vector<BvhVisit
   if (stats) ++stats->queries;
   hit = Hit{};
   if (!is_valid_ray(ray) || nodes_.empty()) return false;
-  const BvhView view{nodes_, &prims_, min_keys_.data()};
+  const BvhView view{nodes_, &prims_};
   const RecordingObserver observer{&visits};
   const bool triangles = !prims_.triangle_keys.empty(), spheres = !prims_.spheres.empty();
   if (triangles && spheres) return bvh_intersect_observed<true, true>(view, ray, hit, stats, observer);
@@ -54,7 +52,7 @@ bool BvhBackend::occluded_traced(const Ray& ray, std::vector<BvhVisit>& visits, 
   visits.clear();
   if (stats) ++stats->queries;
   if (!is_valid_ray(ray) || nodes_.empty()) return false;
-  const BvhView view{nodes_, &prims_, min_keys_.data()};
+  const BvhView view{nodes_, &prims_};
   const RecordingObserver observer{&visits};
   const bool triangles = !prims_.triangle_keys.empty(), spheres = !prims_.spheres.empty();
   if (triangles && spheres) return bvh_occluded_observed<true, true>(view, ray, stats, observer);

@@ -46,50 +46,6 @@ TWINRAY_KERNEL inline bool pop_next(const StackEntry* stack, std::size_t& size, 
   return false;
 }
 
-// True when no primitive below `node` can win against the best hit (t = tmax, tie key best_key), for a box
-// whose float entry bound lies just below or at tmax (pop_closest). Exact, not a heuristic: every triangle
-// below the node lies in its box (boxes are unions of the triangles' float bounds), so a crossing at exact t*
-// puts o + t* d in the box, and for each axis with d_i != 0, t* >= q_i = (near_i - o_i) / d_i (near_i = lo_i
-// for d_i > 0, hi_i for d_i < 0). q_i in double: the difference and the quotient each round once (relative
-// 2^-53), so |q - q_i| <= 2^-52 (1 + 2^-52) |q|, and q - 2^-51 |q| (rounded: at most 2^-53 |q| upward) stays
-// below q_i. When it exceeds m, the double midpoint between tmax and the float below it, t* > m, so the
-// triangle's t = fl32(t*) (correctly rounded, triangle_refine.h) is >= tmax: `precedes` takes it only at
-// t == tmax with a lower (geom_id, prim_id), and min_keys[node] >= best_key rules that out. A NaN or an
-// infinite bound fails `> m` and decides nothing. Subtrees with a sphere have min key 0 (bvh_backend.cpp),
-// and before the first hit best_key is the miss's, above every key: neither is ever skipped.
-[[gnu::noinline, gnu::cold]] TWINRAY_KERNEL inline bool cannot_win_tie(const BvhNode& node, const Ray& ray, float tmax,
-                                                                      std::uint64_t min_key, std::uint64_t best_key) {
-  if (min_key < best_key || !(tmax > 0.0f) || tmax == std::numeric_limits<float>::infinity()) return false;
-  const double below = static_cast<double>(std::nextafter(tmax, 0.0f));
-  const double m = 0.5 * (below + static_cast<double>(tmax));  // exact: both are floats
-  for (int i = 0; i < 3; ++i) {
-    const float d = ray.dir[i];
-    if (d == 0.0f) continue;
-    const float plane = d > 0.0f ? node.lo[i] : node.hi[i];
-    const double q = (static_cast<double>(plane) - static_cast<double>(ray.org[i])) / static_cast<double>(d);
-    if (q - 0x1p-51 * std::fabs(q) > m) return true;
-  }
-  return false;
-}
-
-// pop_next for closest hit, with the tie rule's boxes: a popped box whose entry bound lies within 2^-19 of
-// tmax (the slab bounds of ray_box.h are up to 8 ulps below the exact entry, so a box entered at the best
-// hit's own t, such as a coplanar neighbour on Sponza's floors, lands here) is skipped when cannot_win_tie
-// proves it holds nothing that beats the best hit. `guard` is tmax (1 - 2^-19), kept by the caller; it only
-// chooses which boxes are checked, so its rounding does not matter.
-TWINRAY_KERNEL inline bool pop_closest(const StackEntry* stack, std::size_t& size, float tmax, float guard,
-                                       const BvhView& bvh, const Ray& ray, std::uint64_t best_key,
-                                       std::uint32_t& node) {
-  while (size > 0) {
-    const StackEntry& e = stack[--size];
-    if (!(e.entry <= tmax)) continue;
-    if (e.entry >= guard && cannot_win_tie(bvh.nodes[e.node], ray, tmax, bvh.min_keys[e.node], best_key)) continue;
-    node = e.node;
-    return true;
-  }
-  return false;
-}
-
 // Tests both children; continues with the nearer hit child and pushes the other. False when neither is hit.
 TWINRAY_KERNEL inline bool descend(std::span<const BvhNode> nodes, std::uint32_t index,
                                    const TWINRAY_BOX_PAIR_RAY& pair_ray, StackEntry* stack, std::size_t& size,
@@ -138,8 +94,6 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
   float tmax = ray.tmax;          // shrinks to the best hit's t
   bool best_is_sphere = false;
   std::uint32_t best_index = 0;   // into the store's array of the best hit's kind
-  std::uint64_t best_key = tie_key(kInvalidId, kInvalidId);  // of `best`, for pop_closest
-  float guard = tmax * (1.0f - 0x1p-19f);                      // pop_closest's
   // The best triangle's crossing as its t test computed it, for its u, v at the end (triangle_block.h).
   [[maybe_unused]] refine_detail::Crossing best_crossing;
   [[maybe_unused]] bool best_crossing_kept = false;
@@ -159,8 +113,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     const BvhNode& node = bvh.nodes[index];
     if (!node.is_leaf()) {
       nodes_visited += 2;
-      more = descend(bvh.nodes, index, pair_ray, stack, size, index) ||
-             pop_closest(stack, size, tmax, guard, bvh, ray, best_key, index);
+      more = descend(bvh.nodes, index, pair_ray, stack, size, index) || pop_next(stack, size, tmax, index);
       continue;
     }
     const std::uint32_t first = node.first_prim(), count = node.prim_count();
@@ -176,7 +129,6 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
               best.t = tmax = t;
               best.geom_id = key.geom_id;
               best.prim_id = key.prim_id;
-              best_key = tie_key(key.geom_id, key.prim_id);
               best_is_sphere = false;
               best_index = slot + lane;
               best_crossing_kept = crossing != nullptr;
@@ -194,7 +146,6 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
         best.t = tmax = t;
         best.geom_id = key.geom_id;
         best.prim_id = key.prim_id;
-        best_key = tie_key(key.geom_id, key.prim_id);
         best_is_sphere = true;
         best_index = i;
       }
@@ -202,8 +153,7 @@ TWINRAY_KERNEL __attribute__((always_inline)) inline bool bvh_intersect_observed
     // Here rather than in the hit callback above: a lambda does not inherit the kernel's target attribute, so
     // the AVX broadcast could not be inlined there. One broadcast per leaf.
     pair_ray.set_tmax(tmax);
-    guard = tmax * (1.0f - 0x1p-19f);
-    more = pop_closest(stack, size, tmax, guard, bvh, ray, best_key, index);
+    more = pop_next(stack, size, tmax, index);
   }
 
   if (kCount && stats) {
