@@ -70,10 +70,10 @@ TWINRAY_KERNEL inline refine_detail::Vec4 block_vertex(const TriangleBlock& bloc
 
 // Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling, and ray_box.h
 // for why the near and far distances use the reciprocal pre-scaled by kSlabNearScale and kSlabFarScale).
-TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
-                                          float* entry) {
+// The slab test with the interval given as vectors (t0: tmin, t1: tmax in every lane).
+TWINRAY_KERNEL inline unsigned test_boxes_from(const WideNode& node, const WideBoxRay& r, __m256 t0, __m256 t1,
+                                               float* entry) {
   const float* rows = &node.lo[0][0];
-  __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
   for (int a = 0; a < 3; ++a) {
     const __m256 t_near =
         _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.near_row[a]), splat(r.org[a])), splat(r.inv[a]));
@@ -85,6 +85,27 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
   }
   _mm256_store_ps(entry, t0);
   return cmp_le_mask(t0, t1);
+}
+TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
+                                          float* entry) {
+  return test_boxes_from(node, r, _mm256_set1_ps(tmin), _mm256_set1_ps(tmax), entry);
+}
+
+// The ray's own interval, which any hit keeps all along, kept as the box ray's values are (WideSplat): read as
+// memory operands of the slab test's max and min, where test_boxes' float arguments cost a scalar load and a
+// broadcast each per node visit (the ray is behind a reference). Apart from WideBoxRay so that closest hit,
+// whose tmax shrinks, does not pay for setting it up.
+struct WideBoxInterval {
+  WideSplat tmin, tmax;
+  TWINRAY_KERNEL explicit WideBoxInterval(const Ray& ray) : tmin(make_splat(ray.tmin)), tmax(make_splat(ray.tmax)) {}
+  // As WideBoxRay::reread: read again from memory at each use, not kept in registers across the leaf tests.
+  TWINRAY_KERNEL void reread() { asm("" : "+m"(tmin), "+m"(tmax)); }
+};
+
+// test_boxes against that interval: the same floats, so the same mask and entries.
+TWINRAY_KERNEL inline unsigned test_boxes_in(const WideNode& node, const WideBoxRay& r, const WideBoxInterval& i,
+                                             float* entry) {
+  return test_boxes_from(node, r, splat(i.tmin), splat(i.tmax), entry);
 }
 
 // Bit s set when child slot s is a leaf (the reference's top bit).
