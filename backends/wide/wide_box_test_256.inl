@@ -9,8 +9,9 @@
 // per-axis values are kept: the type WideSplat, make_splat(float) -> WideSplat, splat(WideSplat) -> __m256 and
 // kWideSplatScalars (whether WideSplat is a scalar).
 // AVX2 keeps them as broadcast vectors (its arithmetic has no broadcast memory operand); AVX-512 keeps the
-// scalars, which the slab test reads as {1to8} operands of its subtractions and products: the same values
-// lane by lane, without the set-up's nine broadcasts and nine 32-byte stores.
+// scalars, which the slab test reads as {1to8} operands of its products and broadcasts once per axis for its
+// two subtractions (whose memory operand is the node's row): the same values lane by lane, without the
+// set-up's nine broadcasts and nine 32-byte stores.
 
 // The ray as the slab test needs it, set up as in wide_kernels_sse2.cpp (one division for the three
 // reciprocals, the row offsets from the table of their sign bits).
@@ -99,13 +100,15 @@ TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay
   return test_boxes_from(node, r, _mm256_set1_ps(tmin), _mm256_set1_ps(tmax), entry);
 }
 
-// The ray's own interval, which any hit keeps all along, kept as the box ray's values are (WideSplat): read as
-// memory operands of the slab test's max and min, where test_boxes' float arguments cost a scalar load and a
-// broadcast each per node visit (the ray is behind a reference). Apart from WideBoxRay so that closest hit,
-// whose tmax shrinks, does not pay for setting it up.
+// The ray's own interval, which any hit keeps all along, as broadcast vectors in memory: read as memory operands
+// of the slab test's max and min, where test_boxes' float arguments cost a scalar load and a broadcast each per
+// node visit (the ray is behind a reference). Whole vectors on AVX-512 too: GCC broadcasts a scalar into a
+// register at each visit rather than give max and min a {1to8} operand. Apart from WideBoxRay so that closest
+// hit, whose tmax shrinks, does not pay for setting it up.
 struct WideBoxInterval {
-  WideSplat tmin, tmax;
-  TWINRAY_KERNEL explicit WideBoxInterval(const Ray& ray) : tmin(make_splat(ray.tmin)), tmax(make_splat(ray.tmax)) {}
+  __m256 tmin, tmax;
+  TWINRAY_KERNEL explicit WideBoxInterval(const Ray& ray)
+      : tmin(_mm256_set1_ps(ray.tmin)), tmax(_mm256_set1_ps(ray.tmax)) {}
   // As WideBoxRay::reread: read again from memory at each use, not kept in registers across the leaf tests.
   TWINRAY_KERNEL void reread() { asm("" : "+m"(tmin), "+m"(tmax)); }
 };
@@ -113,7 +116,7 @@ struct WideBoxInterval {
 // test_boxes against that interval: the same floats, so the same mask and entries.
 TWINRAY_KERNEL inline unsigned test_boxes_in(const WideNode& node, const WideBoxRay& r, const WideBoxInterval& i,
                                              float* entry) {
-  return test_boxes_from(node, r, splat(i.tmin), splat(i.tmax), entry);
+  return test_boxes_from(node, r, i.tmin, i.tmax, entry);
 }
 
 // Bit s set when child slot s is a leaf (the reference's top bit).
