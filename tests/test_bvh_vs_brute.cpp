@@ -344,6 +344,55 @@ TEST(BvhVsBrute, OriginOnSlabPlaneWithZeroDirectionComponent) {
   }
 }
 
+TEST(BvhVsBrute, OriginOnSlabPlanesWithNonZeroDirection) {
+  // bvh8's slab test computes (org - plane) * -(scaled reciprocal) (wide_box_test_256.inl), which differs from
+  // ray_box.h's (plane - org) * (scaled reciprocal) only in the sign of a zero, where the origin lies on the
+  // plane. Rays starting on a triangle in the plane x = 1 (whose leaf box is flat there, so both its x planes
+  // pass through the origin) and on the face x = 1 of a box spanning x in [1, 2], leaving or entering along +-x,
+  // with tmin +0 and -0: every near and far x distance of those boxes is a zero. Each ray hits at t = 0 or
+  // further on, so a box wrongly culled shows as a miss. The timed kernels (no statistics) against brute force.
+  SceneGeometry g;
+  TriangleMesh mesh;
+  mesh.positions = {{1, 0, 0}, {1, 1, 0}, {1, 0, 1},            // in the plane x = 1
+                    {1, 2, 0}, {2, 3, 0}, {2, 2, 1},            // x in [1, 2]
+                    {1.5f, 2, -1}, {1.5f, 3.5f, -1}, {1.5f, 2, 2},  // crossed by rays along +x from x = 1
+                    {8, 8, 8}, {9, 8, 8}, {8, 9, 8}};
+  mesh.indices = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 10, 11}};
+  g.meshes.push_back(mesh);
+  std::vector<Ray> rays;
+  for (const float tmin : {0.0f, -0.0f})
+    for (const float tmax : {kInf, 4.0f})
+      for (const float sx : {1.0f, -1.0f})
+        for (const glm::vec3 org : {glm::vec3(1.0f, 0.25f, 0.25f), glm::vec3(1.0f, 2.25f, 0.25f)}) {
+          Ray ray;
+          ray.org = org;
+          ray.dir = {sx, 0.0625f, 0.125f};
+          ray.tmin = tmin;
+          ray.tmax = tmax;
+          rays.push_back(ray);
+        }
+  const std::unique_ptr<Backend> brute = make_brute_backend();
+  brute->build(g);
+  std::vector<Hit> expected(rays.size());
+  std::size_t brute_hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) brute_hits += brute->intersect(rays[i], expected[i]) ? 1 : 0;
+  // Every ray from the triangle in x = 1 hits it at t = 0 (8 rays); those from the box's face going +x hit the
+  // triangle in x = 1.5 at t = 0.5 (4 more); the face's rays going -x miss.
+  ASSERT_GE(brute_hits, rays.size() / 2);
+  for (auto& [name, tree] : trees_on_every_isa()) {
+    SCOPED_TRACE(name);
+    tree->build(g);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      Hit b;
+      const bool found = tree->intersect(rays[i], b);
+      EXPECT_EQ(found, expected[i].found()) << describe(rays[i]);
+      EXPECT_EQ(b.prim_id, expected[i].prim_id) << describe(rays[i]);
+      EXPECT_TRUE(same_bits(b.t, expected[i].t)) << describe(rays[i]);
+      EXPECT_EQ(tree->occluded(rays[i]), expected[i].found()) << describe(rays[i]);
+    }
+  }
+}
+
 TEST(BvhVsBrute, InvalidRaysMissWithoutTraversal) {
   const SceneGeometry g = mixed_spheres_and_triangles(50, 200, 3);
   const float nan = std::numeric_limits<float>::quiet_NaN();

@@ -9,37 +9,37 @@
 // per-axis values are kept: the type WideSplat, make_splat(float) -> WideSplat, splat(WideSplat) -> __m256 and
 // kWideSplatScalars (whether WideSplat is a scalar).
 // AVX2 keeps them as broadcast vectors (its arithmetic has no broadcast memory operand); AVX-512 keeps the
-// scalars, which the slab test reads as {1to8} operands of its subtractions and products: the same values
-// lane by lane, without the set-up's nine broadcasts and nine 32-byte stores.
+// scalars, which the slab test reads as {1to8} operands of its products and broadcasts once per axis for its
+// two subtractions (whose memory operand is the node's row): the same values lane by lane, without the
+// set-up's nine broadcasts and nine 32-byte stores.
 
 // The ray as the slab test needs it, set up as in wide_kernels_sse2.cpp (one division for the three
 // reciprocals, the row offsets from the table of their sign bits).
 struct WideBoxRay {
-  WideSplat org[3], inv[3], inv_far[3];  // inv: the reciprocal * kSlabNearScale; inv_far: * kSlabFarScale
-  // AVX-512 only (kWideSplatScalars): the origin again, for the far planes' subtractions, so that each of the
-  // two reads its own {1to8} operand (GCC would broadcast one copy into a register at every node visit).
-  WideSplat org_far[3];
+  // neg_inv: -(the reciprocal * kSlabNearScale); neg_inv_far: -(the reciprocal * kSlabFarScale). Negated so that
+  // the slab test subtracts the plane from the origin (test_boxes_from): the node's row is then the memory
+  // operand of the subtraction, with no load of its own.
+  WideSplat org[3], neg_inv[3], neg_inv_far[3];
   WideOctantRows rows;
 
   TWINRAY_KERNEL explicit WideBoxRay(const Ray& ray) {
     const __m128 dir = _mm_setr_ps(ray.dir.x, ray.dir.y, ray.dir.z, 1.0f);
     const __m128 inv_dir = _mm_div_ps(_mm_set1_ps(1.0f), dir);
-    alignas(16) float inv_s[4], inv_far_s[4];
-    _mm_store_ps(inv_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabNearScale)));
-    _mm_store_ps(inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(kSlabFarScale)));
+    // fl(x * -c) = -fl(x * c): rounding to nearest is symmetric, so these are the scaled reciprocals negated.
+    alignas(16) float neg_inv_s[4], neg_inv_far_s[4];
+    _mm_store_ps(neg_inv_s, _mm_mul_ps(inv_dir, _mm_set1_ps(-kSlabNearScale)));
+    _mm_store_ps(neg_inv_far_s, _mm_mul_ps(inv_dir, _mm_set1_ps(-kSlabFarScale)));
     for (int a = 0; a < 3; ++a) {
       org[a] = make_splat(ray.org[a]);
-      if constexpr (kWideSplatScalars) org_far[a] = make_splat(ray.org[a]);
-      inv[a] = make_splat(inv_s[a]);
-      inv_far[a] = make_splat(inv_far_s[a]);
+      neg_inv[a] = make_splat(neg_inv_s[a]);
+      neg_inv_far[a] = make_splat(neg_inv_far_s[a]);
     }
     rows = kWideOctantRows[static_cast<unsigned>(_mm_movemask_ps(inv_dir)) & 7u];
   }
 
   // Tells the compiler the values may have changed in memory (wide_traversal.inl, reread_vectors).
   TWINRAY_KERNEL void reread() {
-    if constexpr (kWideSplatScalars) asm("" : "+m"(org), "+m"(inv), "+m"(inv_far), "+m"(org_far));
-    else asm("" : "+m"(org), "+m"(inv), "+m"(inv_far));
+    asm("" : "+m"(org), "+m"(neg_inv), "+m"(neg_inv_far));
   }
 };
 
@@ -69,22 +69,54 @@ TWINRAY_KERNEL inline refine_detail::Vec4 block_vertex(const TriangleBlock& bloc
 }
 
 // Ize's robust slab test on all eight boxes (see wide_kernels_sse2.cpp for the NaN handling, and ray_box.h
-// for why the near and far distances use the reciprocal pre-scaled by kSlabNearScale and kSlabFarScale).
-TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
-                                          float* entry) {
+// for why the near and far distances use the reciprocal pre-scaled by kSlabNearScale and kSlabFarScale),
+// with the interval given as vectors (t0: tmin, t1: tmax in every lane).
+TWINRAY_KERNEL inline unsigned test_boxes_from(const WideNode& node, const WideBoxRay& r, __m256 t0, __m256 t1,
+                                               float* entry) {
   const float* rows = &node.lo[0][0];
-  __m256 t0 = _mm256_set1_ps(tmin), t1 = _mm256_set1_ps(tmax);
+  // (org - plane) * -(scaled reciprocal) against ray_box.h's (plane - org) * (scaled reciprocal): rounding to
+  // nearest is symmetric, so a non-zero difference is the same difference negated and the product is the same
+  // float, its sign and a flushed zero's sign included. Two cases differ only in a sign bit: org = plane, where
+  // both differences are +0 and the product is a zero of the other sign (or NaN for an infinite reciprocal, in
+  // either form), and that NaN itself. Neither changes the result: max(x, t0) and min(x, t1) return their
+  // second operand, the interval so far, for a NaN x and for two zeros of any signs, so t0 stays tmin or a
+  // non-zero near distance (bit for bit the same entries), t1 may become a zero of the other sign only where
+  // the old form gave a zero too, and t0 <= t1 compares -0 and +0 as equal: the same mask. One load fewer per
+  // plane (the row is the subtraction's memory operand).
   for (int a = 0; a < 3; ++a) {
+    const __m256 org = splat(r.org[a]);  // one register for both planes of the axis
     const __m256 t_near =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.near_row[a]), splat(r.org[a])), splat(r.inv[a]));
-    const WideSplat& org_far = kWideSplatScalars ? r.org_far[a] : r.org[a];
+        _mm256_mul_ps(_mm256_sub_ps(org, _mm256_load_ps(rows + r.rows.near_row[a])), splat(r.neg_inv[a]));
     const __m256 t_far =
-        _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(rows + r.rows.far_row[a]), splat(org_far)), splat(r.inv_far[a]));
+        _mm256_mul_ps(_mm256_sub_ps(org, _mm256_load_ps(rows + r.rows.far_row[a])), splat(r.neg_inv_far[a]));
     t0 = _mm256_max_ps(t_near, t0);
     t1 = _mm256_min_ps(t_far, t1);
   }
   _mm256_store_ps(entry, t0);
   return cmp_le_mask(t0, t1);
+}
+TWINRAY_KERNEL inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin, float tmax,
+                                          float* entry) {
+  return test_boxes_from(node, r, _mm256_set1_ps(tmin), _mm256_set1_ps(tmax), entry);
+}
+
+// The ray's own interval, which any hit keeps all along, as broadcast vectors in memory: read as memory operands
+// of the slab test's max and min, where test_boxes' float arguments cost a scalar load and a broadcast each per
+// node visit (the ray is behind a reference). Whole vectors on AVX-512 too: GCC broadcasts a scalar into a
+// register at each visit rather than give max and min a {1to8} operand. Apart from WideBoxRay so that closest
+// hit, whose tmax shrinks, does not pay for setting it up.
+struct WideBoxInterval {
+  __m256 tmin, tmax;
+  TWINRAY_KERNEL explicit WideBoxInterval(const Ray& ray)
+      : tmin(_mm256_set1_ps(ray.tmin)), tmax(_mm256_set1_ps(ray.tmax)) {}
+  // As WideBoxRay::reread: read again from memory at each use, not kept in registers across the leaf tests.
+  TWINRAY_KERNEL void reread() { asm("" : "+m"(tmin), "+m"(tmax)); }
+};
+
+// test_boxes against that interval: the same floats, so the same mask and entries.
+TWINRAY_KERNEL inline unsigned test_boxes_in(const WideNode& node, const WideBoxRay& r, const WideBoxInterval& i,
+                                             float* entry) {
+  return test_boxes_from(node, r, i.tmin, i.tmax, entry);
 }
 
 // Bit s set when child slot s is a leaf (the reference's top bit).

@@ -86,6 +86,16 @@ inline unsigned test_boxes(const WideNode& node, const WideBoxRay& r, float tmin
   return test_four(&node.lo[0][0], r, 0, t0, t1, entry) | (test_four(&node.lo[0][0], r, 4, t0, t1, entry) << 4);
 }
 
+// The any-hit traversal's fixed interval (the AVX2 and AVX-512 kernels keep it as vectors, wide_box_test_256.inl).
+struct WideBoxInterval {
+  float tmin, tmax;
+  explicit WideBoxInterval(const Ray& ray) : tmin(ray.tmin), tmax(ray.tmax) {}
+  void reread() {}
+};
+inline unsigned test_boxes_in(const WideNode& node, const WideBoxRay& r, const WideBoxInterval& i, float* entry) {
+  return test_boxes(node, r, i.tmin, i.tmax, entry);
+}
+
 // Bit s set when child slot s is a leaf (the reference's top bit).
 inline unsigned leaf_children(const WideNode& node) {
   const __m128 lo = _mm_castsi128_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(node.child)));

@@ -278,6 +278,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCop
 [[gnu::always_inline]] TWINRAY_KERNEL inline bool occluded_impl(const WideView& bvh, const Ray& ray,
                                                                 QueryStats* stats) {
   WideBoxRay box_ray(ray);
+  WideBoxInterval interval(ray);  // [tmin, tmax] as the box test reads it
   const TriangleRay tri_ray = make_wide_triangle_ray(ray);
   const PrimitiveStore& prims = *bvh.prims;
 
@@ -298,7 +299,8 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCop
     // which clobbers every vector register, and GCC spills and reloads all of them at each node with a
     // hit leaf (docs/bvh-backend.md, "Any-hit, sixth round").
     reread_vectors(box_ray);
-    const unsigned mask = test_boxes(node, box_ray, ray.tmin, ray.tmax, entry);
+    interval.reread();
+    const unsigned mask = test_boxes_in(node, box_ray, interval, entry);
     const unsigned leaves = mask & leaf_children(node);
     for (unsigned m = leaves; m != 0; m &= m - 1) {
       if (leaf_occluded<kTriangles, kSpheres, kStats, kCopy>(prims, node.child[__builtin_ctz(m)], ray, tri_ray, prims_tested)) {
