@@ -244,7 +244,7 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
     if (suite.scenes.count(c.second_scene) == 0) n->fail(fmt::format("no scene '{}' in \"scenes\"", c.second_scene));
   }
   if (c.category == Category::Complexity && c.second_scene.empty())
-    node.fail("a complexity check needs \"second_scene\": the same kind of scene with about 4 times the primitives");
+    node.fail("a complexity check needs \"second_scene\": the same kind of scene with several (the bundled suites: 16) times the primitives");
   if (auto n = node.optional_member("threads")) c.threads = static_cast<int>(n->as_integer(2, 64));
   if (auto n = node.optional_member("repeat")) c.repeat = static_cast<int>(n->as_integer(1, 100));
   if (auto n = node.optional_member("min_seconds")) {

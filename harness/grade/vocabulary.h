@@ -31,7 +31,7 @@ enum class Category {
   TreeQuality,
   DeepTree,
   BatchCalls,  // the plugin's optional intersect_batch / occluded_batch; not applicable to a plugin without them
-  Complexity,  // how time per ray grows from a scene to one with about 4x the primitives (check_complexity.cpp)
+  Complexity,  // how time per ray grows from a scene to one with several times the primitives (check_complexity.cpp)
 };
 
 enum class Visibility { Visible, Hidden, AfterDueDate, AfterPublished };
