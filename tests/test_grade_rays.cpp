@@ -78,7 +78,7 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
   }
   // Every kind is present: neither all hits nor all misses.
   EXPECT_GT(hits, 200u);
-  EXPECT_LT(hits, 550u);
+  EXPECT_LT(hits, 650u);  // of 712: 600, 75 segments, 37 past their sphere
   // The rays whose tmin lies inside the sphere (between its roots) all hit, beyond tmin: the far root.
   std::size_t inside_interval = 0;
   for (const Ray& r : rays) {
