@@ -40,7 +40,7 @@ TEST(GradeMeasure, ComplexityTellsATreeFromBruteForce) {
   const Scorecard tree = testing::grade_with_test_suite(scotty_plugin(), {"complexity-grid"});
   const CheckResult& t = check_named(tree, "complexity-grid");
   EXPECT_EQ(t.outcome, Outcome::Pass) << terminal_check_line(t);
-  EXPECT_LT(t.figures["closest"]["growth_exponent"].get<double>(), 0.5);
+  EXPECT_LT(t.figures["closest"]["growth_exponent"].get<double>(), 0.7);
   EXPECT_TRUE(tree.performance.contains("complexity-grid"));
 
   const Scorecard brute = testing::grade_with_test_suite(test_plugin("libtwinray_brute_plugin.so"), {"complexity-grid"});
@@ -50,6 +50,7 @@ TEST(GradeMeasure, ComplexityTellsATreeFromBruteForce) {
   EXPECT_NE(b.detail.find("brute force or a tree degenerated"), std::string::npos) << b.detail;
   EXPECT_FALSE(b.reproduce.empty());
   EXPECT_TRUE(brute.passed());  // not required, worth 0 in the test suite
+
 }
 
 }  // namespace

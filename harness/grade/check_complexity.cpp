@@ -7,10 +7,10 @@
 //   e = log(time per ray on the larger scene / on the smaller) / log(primitives of the larger / of the smaller)
 //
 // 1 for brute force or a tree degenerated into a list, about 0.1 to 0.3 for a tree (depth grows by log2 16 = 4
-// levels of about 12 to 16, and the larger tree fits the caches less well). The check fails when e exceeds max_growth_exponent (0.5 unless the suite says: the
-// geometric middle between a tree and a list, a 4x growth for 16x the primitives). Ratios on one machine in one run, so fair whatever the
-// machine's speed; a busy machine slows both scenes alike, and the alternation and the fastest run keep a burst
-// of load from landing on one scene only. Nodes per ray (when the plugin counts them) are reported beside it,
+// levels of about 12 to 16, and the larger tree fits the caches less well). The check fails when e exceeds max_growth_exponent (0.7 unless the suite says: a
+// 7x growth for 16x the primitives; correct plugins measured up to 0.40 on a loaded machine, brute force 0.94). Ratios on one machine in one run, so fair whatever the
+// machine's speed; a busy machine slows both scenes alike, and the growth is the median over rounds of ratios
+// measured back to back (order alternating), so a burst of load on one call does not decide it. Nodes per ray (when the plugin counts them) are reported beside it,
 // not judged: a plugin's own counts are not evidence.
 
 #include "harness/grade/checks.h"
@@ -26,12 +26,12 @@ namespace twinray::grade {
 namespace {
 
 constexpr std::size_t kDefaultRays = 5000;  // per kind and scene: calls of a few ms for a tree, above scheduling noise
-constexpr int kRounds = 5;
+constexpr int kRounds = 7;
 // Rounds stop early (after at least kMinRounds) once the plugin's timing has taken this long: a brute-force
 // plugin's calls take seconds, and its verdict does not need five of them.
-constexpr int kMinRounds = 2;
+constexpr int kMinRounds = 3;
 constexpr double kRoundsSeconds = 2.0;
-constexpr double kDefaultMaxExponent = 0.5;
+constexpr double kDefaultMaxExponent = 0.7;
 
 double seconds_of(const Backend& backend, std::span<const Ray> rays, bool any_hit, QueryStats& stats) {
   std::vector<Hit> hits(any_hit ? 0 : rays.size());
@@ -75,21 +75,28 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
 
   PluginInstance plugin = ctx.built_plugin();  // instance 0 on the scene, 1 on second_scene
   double best[2][2] = {{INFINITY, INFINITY}, {INFINITY, INFINITY}};
+  std::vector<double> round_growth[2];  // per round: large over small, per ray, measured back to back
   QueryStats stats[2];
   const auto timing_start = std::chrono::steady_clock::now();
   for (int r = 0; r < kRounds; ++r) {
     if (r >= kMinRounds &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - timing_start).count() > kRoundsSeconds)
       break;
-    for (int s = 0; s < 2; ++s) {
+    double t[2][2];
+    for (int k = 0; k < 2; ++k) {
+      const int s = (k + r) % 2;  // the scenes' order alternates, so neither always runs first
       plugin.use_instance(static_cast<std::size_t>(s));
       for (int q = 0; q < 2; ++q) {
         QueryStats st;
-        const double t = seconds_of(*plugin, rays[s], q == 1, st);
-        best[s][q] = std::min(best[s][q], t);
+        t[s][q] = seconds_of(*plugin, rays[s], q == 1, st);
+        best[s][q] = std::min(best[s][q], t[s][q]);
         if (q == 0) stats[s] = st;
       }
     }
+    for (int q = 0; q < 2; ++q)
+      round_growth[q].push_back(t[0][q] > 0.0 ? t[1][q] / static_cast<double>(std::max<std::size_t>(rays[1].size(), 1)) /
+                                                    (t[0][q] / static_cast<double>(std::max<std::size_t>(rays[0].size(), 1)))
+                                              : 0.0);
   }
   plugin.end();
 
@@ -103,14 +110,21 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
   for (int q = 0; q < 2; ++q) {
     const double per[2] = {best[0][q] / static_cast<double>(std::max<std::size_t>(rays[0].size(), 1)),
                            best[1][q] / static_cast<double>(std::max<std::size_t>(rays[1].size(), 1))};
-    const double e = exponent(per[0], per[1], prim_ratio);
+    // The median of the rounds' paired ratios: a wake-up delay of the worker on a busy machine (milliseconds,
+    // against calls of a few) lands on one call of a pair, and the median drops it; the fastest run of each
+    // scene would instead pair a lucky run of one with an unlucky run of the other.
+    std::vector<double> g = round_growth[q];
+    std::sort(g.begin(), g.end());
+    const double growth = g.empty() ? 0.0 : g[g.size() / 2];
+    const double e = exponent(1.0, growth, prim_ratio);
     const double e_ref = exponent(ref[0][q], ref[1][q], prim_ratio);
     v.figures[query_names[q]] = {{"seconds_per_ray", {per[0], per[1]}},
-                                 {"growth", per[0] > 0.0 ? per[1] / per[0] : 0.0},
+                                 {"growth", growth},
+                                 {"rounds", g.size()},
                                  {"growth_exponent", e},
                                  {"bvh_nodes_growth_exponent", e_ref}};
     detail += fmt::format("{}{} hit: time per ray x{:.2f} for x{:.1f} primitives (exponent {:.2f}; bvh's nodes per ray {:.2f})",
-                          q == 0 ? "" : ", ", q == 0 ? "closest" : "any", per[0] > 0.0 ? per[1] / per[0] : 0.0,
+                          q == 0 ? "" : ", ", q == 0 ? "closest" : "any", growth,
                           prim_ratio, e, e_ref);
     if (!(e <= max_e))
       failed.push_back(fmt::format("{} hit grows with exponent {:.2f}, above {:.2f} (1 is linear: brute force or a "
