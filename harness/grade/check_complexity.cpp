@@ -31,8 +31,9 @@ namespace {
 constexpr std::size_t kDefaultRays = 5000;  // per kind and scene: calls of a few ms for a tree, above scheduling noise
 constexpr int kRounds = 7;
 // Rounds stop early (after at least kMinRounds) once the plugin's timing has taken this long: a brute-force
-// plugin's calls take seconds, and its verdict does not need five of them.
-constexpr int kMinRounds = 3;
+// plugin's calls take seconds, are compute-bound (load moves them little) and its verdict does not need more;
+// a tree's calls take milliseconds, so it always gets every round.
+constexpr int kMinRounds = 1;
 constexpr double kRoundsSeconds = 2.0;
 constexpr double kDefaultMaxExponent = 0.7;
 
