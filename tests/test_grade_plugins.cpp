@@ -166,7 +166,9 @@ INSTANTIATE_TEST_SUITE_P(
                       BugCase{"anyhit-solid-sphere", "spheres-sizes", Outcome::Fail, "plugin says occluded",
                               "closest-soup"},
                       BugCase{"prune-no-slack", "ties-duplicates-box", Outcome::Fail, "answers wrong",
-                              "ties-duplicates"}),
+                              "ties-duplicates"},
+                      BugCase{"sphere-anyhit-t0", "spheres-sizes", Outcome::Fail, "plugin says occluded",
+                              "closest-soup"}),
     [](const ::testing::TestParamInfo<BugCase>& param) {
       std::string name = param.param.bug;
       for (char& c : name)

@@ -78,11 +78,11 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
   }
   // Every kind is present: neither all hits nor all misses.
   EXPECT_GT(hits, 200u);
-  EXPECT_LT(hits, 550u);
+  EXPECT_LT(hits, 650u);  // of 712: 600, 75 segments, 37 past their sphere
   // The rays whose tmin lies inside the sphere (between its roots) all hit, beyond tmin: the far root.
   std::size_t inside_interval = 0;
   for (const Ray& r : rays) {
-    if (r.tmin == 0.0f) continue;
+    if (r.tmin != 1.0f) continue;
     ++inside_interval;
     Hit h;
     ASSERT_TRUE(brute->intersect(r, h));
@@ -105,6 +105,24 @@ TEST(GradeRays, SphereRaysHitAndMissAsDesigned) {
     EXPECT_FALSE(brute->occluded(r));
   }
   EXPECT_EQ(segments, 600u / 8);
+  // The rays that start past their sphere (tmin 2.5): from 0 they hit it before t 1.91; from tmin they do not
+  // hit that sphere again (a miss, or another sphere beyond).
+  std::size_t past = 0;
+  for (const Ray& r : rays) {
+    if (r.tmin != 2.5f) continue;
+    ++past;
+    Ray from_zero = r;
+    from_zero.tmin = 0.0f;
+    Hit aimed;
+    ASSERT_TRUE(brute->intersect(from_zero, aimed));
+    EXPECT_LT(aimed.t, 1.91f);
+    Hit h;
+    if (brute->intersect(r, h)) {
+      EXPECT_NE(h.geom_id, aimed.geom_id);
+      EXPECT_GE(h.t, r.tmin);
+    }
+  }
+  EXPECT_EQ(past, 600u / 16);
 }
 
 // Rays whose interval ends exactly at a crossing (interval_ends.h): on the Cornell box's walls and the integer

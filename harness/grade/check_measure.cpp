@@ -1,5 +1,7 @@
 // performance: build time and closest-hit rays per second of the plugin against bvh and embree-fast on the
-// same rays, on one thread each (the plugin's figure includes the round trips to its worker process), and
+// same rays, on one thread each (the plugin's figure includes the round trips to its worker process), through
+// its single-ray functions and, when it has them, its batch functions (the path twinray's renders take, and the
+// one thresholds judge then); any-hit rays per second too, and both per ray kind; and
 // nodes and primitives per ray when the plugin counts them. Reported always; worth points only when the
 // suite sets thresholds. Wrong answers on the timed rays fail the check whatever the speed: a fast wrong
 // answer is not fast.
@@ -9,6 +11,7 @@
 
 #include "harness/grade/answers.h"
 #include "harness/grade/checks.h"
+#include "harness/grade/grade_rays.h"
 #include "harness/grade/tree_cost.h"
 
 #include <fmt/core.h>
@@ -26,24 +29,39 @@ constexpr std::size_t kDefaultTreeRays = 20000;
 constexpr int kTimedRuns = 2;  // the faster of two runs: the first also warms caches and the worker's pages
 
 struct Timing {
-  double rays_per_second = 0.0;
-  QueryStats stats;  // of one run
+  double seconds = 0.0;  // the faster run
+  QueryStats stats;      // of one run
 };
 
-Timing time_closest(const Backend& backend, std::span<const Ray> rays) {
+// Closest hits (any_hit false) or any-hit answers of `rays`, timed kTimedRuns times.
+Timing time_query(const Backend& backend, std::span<const Ray> rays, bool any_hit) {
   Timing t;
-  std::vector<Hit> hits(rays.size());
+  std::vector<Hit> hits(any_hit ? 0 : rays.size());
+  std::vector<std::uint8_t> occluded(any_hit ? rays.size() : 0);
   double best = INFINITY;
   for (int run = 0; run < kTimedRuns; ++run) {
     QueryStats stats;
     const auto start = std::chrono::steady_clock::now();
-    backend.intersect(rays, std::span<Hit>(hits), &stats);
+    if (any_hit) backend.occluded(rays, std::span<std::uint8_t>(occluded), &stats);
+    else backend.intersect(rays, std::span<Hit>(hits), &stats);
     best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     t.stats = stats;
   }
-  t.rays_per_second = best > 0.0 ? static_cast<double>(rays.size()) / best : 0.0;
+  t.seconds = best;
   return t;
 }
+
+double rate(std::size_t rays, double seconds) { return seconds > 0.0 ? static_cast<double>(rays) / seconds : 0.0; }
+double ratio(double a, double b) { return b > 0.0 ? a / b : 0.0; }
+
+// One ray kind's rays, and the seconds each timed path took on them, closest hit [0] and any hit [1].
+enum Path { kBvh, kEmbreeFast, kPlugin, kPluginBatch, kPaths };
+constexpr const char* kPathNames[kPaths] = {"bvh", "embree-fast", "plugin", "plugin_batch"};
+struct KindTimes {
+  crosscheck::RayKind kind;
+  std::vector<Ray> rays;
+  Timing times[kPaths][2];
+};
 
 double per_ray(std::uint64_t total, std::size_t rays) {
   return rays ? static_cast<double>(total) / static_cast<double>(rays) : 0.0;
@@ -66,17 +84,40 @@ std::string join(const std::vector<std::string>& parts) {
 }  // namespace
 
 CheckVerdict run_performance_check(CheckContext& ctx) {
-  const std::vector<Ray> rays = ctx.rays_of_kinds({crosscheck::RayKind::Camera, crosscheck::RayKind::Diffuse},
-                                                  ctx.count_or(kDefaultPerformanceRays));
+  const std::size_t count = ctx.count_or(kDefaultPerformanceRays);
+  const std::vector<crosscheck::RayKind> kinds =
+      ctx.spec.rays.empty() ? std::vector<crosscheck::RayKind>{crosscheck::RayKind::Camera, crosscheck::RayKind::Diffuse}
+                            : ctx.spec.rays;
+  std::vector<KindTimes> per_kind;
+  std::vector<Ray> rays;
+  for (const crosscheck::RayKind k : kinds) {
+    KindTimes kt{k, kind_rays(k, ctx.scene.scene(), ctx.scene.reference("embree"), count, ctx.spec.seed), {}};
+    rays.insert(rays.end(), kt.rays.begin(), kt.rays.end());
+    per_kind.push_back(std::move(kt));
+  }
   // The references are timed before the plugin's worker starts: nothing it runs (a helper thread that spins)
   // can slow them and so flatter its own ratio.
   const Backend& bvh = ctx.scene.reference("bvh");
   const Backend& fast = ctx.scene.reference("embree-fast");
-  const Timing theirs = time_closest(bvh, rays);
-  const Timing embree = time_closest(fast, rays);
+  for (KindTimes& kt : per_kind)
+    for (int q = 0; q < 2; ++q) {
+      kt.times[kBvh][q] = time_query(bvh, kt.rays, q == 1);
+      kt.times[kEmbreeFast][q] = time_query(fast, kt.rays, q == 1);
+    }
   PluginInstance plugin = ctx.built_plugin();
   const double build_seconds = plugin->build_stats().build_seconds;
-  const Timing mine = time_closest(*plugin, rays);
+  // The single-ray functions (every plugin has them; the figures' meaning since the first round), then, for a
+  // plugin with batch functions, the path twinray's renders and crosscheck take: its batch calls. A query the
+  // plugin has no batch function for goes through its single-ray function on that path too, as twinray calls it.
+  const bool has_batch = ctx.env.plugin.has_intersect_batch() || ctx.env.plugin.has_occluded_batch();
+  for (KindTimes& kt : per_kind)
+    for (int q = 0; q < 2; ++q) kt.times[kPlugin][q] = time_query(*plugin, kt.rays, q == 1);
+  if (has_batch) {
+    plugin.use_batch_functions();
+    for (KindTimes& kt : per_kind)
+      for (int q = 0; q < 2; ++q) kt.times[kPluginBatch][q] = time_query(*plugin, kt.rays, q == 1);
+    plugin.use_single_calls();
+  }
 
   const Answers answers = trace_rays(*plugin, rays, Queries::Closest);
   plugin.end();
@@ -85,37 +126,81 @@ CheckVerdict run_performance_check(CheckContext& ctx) {
                             {Queries::Closest, "embree", ctx.env.plugin.traits().honours_ties, "plugin",
                              ctx.env.plugin.traits().watertight});
 
-  const double vs_bvh = theirs.rays_per_second > 0.0 ? mine.rays_per_second / theirs.rays_per_second : 0.0;
-  const double vs_fast = embree.rays_per_second > 0.0 ? mine.rays_per_second / embree.rays_per_second : 0.0;
+  // Totals over the kinds: rays over the sum of each kind's fastest run.
+  double seconds[kPaths][2] = {};
+  QueryStats stats[kPaths];
+  for (const KindTimes& kt : per_kind)
+    for (int p = 0; p < kPaths; ++p) {
+      for (int q = 0; q < 2; ++q) seconds[p][q] += kt.times[p][q].seconds;
+      stats[p].nodes_visited += kt.times[p][0].stats.nodes_visited;
+      stats[p].primitives_tested += kt.times[p][0].stats.primitives_tested;
+    }
+  const auto rates = [&](int q, double const (&s)[kPaths][2], std::size_t n) {
+    nlohmann::json r = nlohmann::json::object();
+    for (int p = 0; p < kPaths; ++p)
+      r[kPathNames[p]] = p == kPluginBatch && !has_batch ? nlohmann::json(nullptr) : nlohmann::json(rate(n, s[p][q]));
+    return r;
+  };
+  const double mine = rate(rays.size(), seconds[kPlugin][0]);
+  const double mine_batch = rate(rays.size(), seconds[kPluginBatch][0]);
+  const double theirs = rate(rays.size(), seconds[kBvh][0]);
+  const double embree = rate(rays.size(), seconds[kEmbreeFast][0]);
+  const double vs_bvh = ratio(mine, theirs), vs_fast = ratio(mine, embree);
+  const double vs_bvh_batch = ratio(mine_batch, theirs), vs_fast_batch = ratio(mine_batch, embree);
+  // Thresholds judge the path twinray takes: the batch calls when the plugin has intersect_batch.
+  const bool judge_batch = ctx.env.plugin.has_intersect_batch();
+  const double judged_vs_bvh = judge_batch ? vs_bvh_batch : vs_bvh;
+  const double judged_vs_fast = judge_batch ? vs_fast_batch : vs_fast;
+  const double any_mine = rate(rays.size(), seconds[kPlugin][1]);
+  const double any_mine_batch = rate(rays.size(), seconds[kPluginBatch][1]);
+  const double any_theirs = rate(rays.size(), seconds[kBvh][1]);
   const bool counted = ctx.env.plugin.traits().counts_traversal;
+  const auto or_null = [&](double x) { return has_batch ? nlohmann::json(x) : nlohmann::json(nullptr); };
+
   CheckVerdict v;
   v.scored = ctx.spec.thresholds.any();
   v.figures = {{"rays", rays.size()},
                {"build_seconds", {{"plugin", build_seconds},
                                   {"bvh", bvh.build_stats().build_seconds},
                                   {"embree-fast", fast.build_stats().build_seconds}}},
-               {"rays_per_second", {{"plugin", mine.rays_per_second},
-                                    {"bvh", theirs.rays_per_second},
-                                    {"embree-fast", embree.rays_per_second}}},
+               {"rays_per_second", rates(0, seconds, rays.size())},
                {"speed_vs_bvh", vs_bvh},
                {"speed_vs_embree_fast", vs_fast},
+               {"speed_vs_bvh_batch", or_null(vs_bvh_batch)},
+               {"speed_vs_embree_fast_batch", or_null(vs_fast_batch)},
+               {"judged_path", judge_batch ? "batch" : "single"},
+               {"any_hit", {{"rays_per_second", rates(1, seconds, rays.size())},
+                            {"speed_vs_bvh", ratio(any_mine, any_theirs)},
+                            {"speed_vs_bvh_batch", or_null(ratio(any_mine_batch, any_theirs))}}},
                {"wrong", j.wrong_total()}};
+  nlohmann::json kinds_json = nlohmann::json::object();
+  for (const KindTimes& kt : per_kind) {
+    double s[kPaths][2];
+    for (int p = 0; p < kPaths; ++p)
+      for (int q = 0; q < 2; ++q) s[p][q] = kt.times[p][q].seconds;
+    kinds_json[std::string(crosscheck::to_string(kt.kind))] = {{"closest", rates(0, s, kt.rays.size())},
+                                                               {"any", rates(1, s, kt.rays.size())}};
+  }
+  v.figures["per_kind"] = kinds_json;
   if (counted) {
-    v.figures["nodes_per_ray"] = {{"plugin", per_ray(mine.stats.nodes_visited, rays.size())},
-                                  {"bvh", per_ray(theirs.stats.nodes_visited, rays.size())}};
-    v.figures["primitives_per_ray"] = {{"plugin", per_ray(mine.stats.primitives_tested, rays.size())},
-                                       {"bvh", per_ray(theirs.stats.primitives_tested, rays.size())}};
+    v.figures["nodes_per_ray"] = {{"plugin", per_ray(stats[kPlugin].nodes_visited, rays.size())},
+                                  {"bvh", per_ray(stats[kBvh].nodes_visited, rays.size())}};
+    v.figures["primitives_per_ray"] = {{"plugin", per_ray(stats[kPlugin].primitives_tested, rays.size())},
+                                       {"bvh", per_ray(stats[kBvh].primitives_tested, rays.size())}};
   }
 
   std::vector<std::string> failed;
-  require(ctx.spec.thresholds.min_speed_vs_bvh, false, vs_bvh, "speed vs bvh", failed);
-  require(ctx.spec.thresholds.min_speed_vs_embree_fast, false, vs_fast, "speed vs embree-fast", failed);
+  const char* path = judge_batch ? " (batch calls)" : "";
+  require(ctx.spec.thresholds.min_speed_vs_bvh, false, judged_vs_bvh, fmt::format("speed vs bvh{}", path).c_str(), failed);
+  require(ctx.spec.thresholds.min_speed_vs_embree_fast, false, judged_vs_fast,
+          fmt::format("speed vs embree-fast{}", path).c_str(), failed);
   require(ctx.spec.thresholds.max_build_seconds, true, build_seconds, "build seconds", failed);
   if (j.wrong_total() != 0)
     failed.insert(failed.begin(), fmt::format("{} of the timed rays answered wrong", j.wrong_total()));
   v.passed = failed.empty();
-  const std::string figures = fmt::format("{:.3g} Mrays/s, {:.2f}x bvh, {:.2f}x embree-fast, build {:.3f} s",
-                                          mine.rays_per_second * 1e-6, vs_bvh, vs_fast, build_seconds);
+  std::string figures = fmt::format("{:.3g} Mrays/s, {:.2f}x bvh, {:.2f}x embree-fast", mine * 1e-6, vs_bvh, vs_fast);
+  if (has_batch) figures += fmt::format("; batch calls {:.3g} Mrays/s, {:.2f}x bvh", mine_batch * 1e-6, vs_bvh_batch);
+  figures += fmt::format("; any hit {:.2f}x bvh, build {:.3f} s", ratio(any_mine, any_theirs), build_seconds);
   v.detail = v.passed ? figures : figures + ": " + join(failed);
   if (!v.passed) v.reproduce = ctx.grade_command();
   return v;

@@ -145,6 +145,7 @@ CheckVerdict run_check(CheckContext& context) {
     case Category::Performance: return run_performance_check(context);
     case Category::TreeQuality: return run_tree_quality_check(context);
     case Category::BatchCalls: return run_batch_check(context);
+    case Category::Complexity: return run_complexity_check(context);
   }
   throw std::logic_error("unknown check category");
 }

@@ -52,6 +52,8 @@ class PluginInstance {
   // Batch queries call the plugin's batch functions from now on (the batch-calls check; launched instances
   // call its single-ray functions, PluginLauncher::launch).
   void use_batch_functions() { backend_->set_batch_path(BatchPath::PluginBatch); }
+  // Back to the single-ray functions (the performance check times both paths).
+  void use_single_calls() { backend_->set_batch_path(BatchPath::SingleCalls); }
   // Ends the worker; afterwards the instance answers nothing. Never throws.
   void end();
 
@@ -127,6 +129,7 @@ CheckVerdict run_determinism_check(CheckContext& context);
 CheckVerdict run_performance_check(CheckContext& context);
 CheckVerdict run_tree_quality_check(CheckContext& context);
 CheckVerdict run_batch_check(CheckContext& context);  // batch-calls
+CheckVerdict run_complexity_check(CheckContext& context);
 
 // `twinray grade PLUGIN --suite SUITE --check NAME` for any check of the suite.
 std::string grade_command(const CheckEnvironment& env, const CheckSpec& spec);

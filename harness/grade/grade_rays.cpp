@@ -194,6 +194,24 @@ std::vector<Ray> sphere_rays(const Scene& scene, std::size_t count, std::uint64_
     const glm::vec3 org = s.center + 0.5f * s.radius * inner.next_float() * sample_uniform_sphere(next2(inner));
     rays.push_back(make(org, sample_uniform_sphere(next2(inner)), 0.0f, 0.4f * s.radius));
   }
+  // Then count / 16 rays that start past their sphere (twelfth round): from outside (2 to 10 r from the centre) at
+  // a point of the disc through the centre (within 0.9 r of it), which the ray reaches at t = 1, with tmin 2.5.
+  // |dir| >= 1.1 r, so the far root is at most 1 + r / |dir| < 1.91: the whole sphere lies at least 0.59 |dir|
+  // (0.65 r) before tmin, and no rounding makes it count. A test that takes a sphere's roots from t = 0 (or from
+  // an epsilon) rather than from tmin, in any-hit or closest-hit, answers that sphere; the right answer is
+  // whatever lies beyond (often nothing).
+  Rng past = Rng::keyed(seed, 0x5bee, 7);
+  const std::size_t behind = count / 16;
+  for (std::size_t i = 0; i < behind; ++i) {
+    const Sphere& s = spheres[i % spheres.size()];
+    const glm::vec3 away = sample_uniform_sphere(next2(past));
+    const glm::vec3 helper = std::fabs(away.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    const glm::vec3 across = glm::normalize(glm::cross(away, helper)), across2 = glm::cross(away, across);
+    const glm::vec3 from = s.center + (2.0f + 8.0f * past.next_float()) * s.radius * away;
+    const glm::vec2 d = sample_concentric_disk(next2(past)) * 0.9f;
+    const glm::vec3 target = s.center + s.radius * (d.x * across + d.y * across2);
+    rays.push_back(make(from, target - from, 2.5f));
+  }
   return rays;
 }
 

@@ -38,7 +38,9 @@ void prepare_references(CheckContext& ctx) {
   ctx.scene.reference("embree");  // rays that start on surfaces come from its first hits
   ctx.scene.reference(ctx.reference_name());
   if (ctx.spec.category == Category::Performance) ctx.scene.reference("embree-fast");
-  if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality) ctx.scene.reference("bvh");
+  if (ctx.spec.category == Category::Performance || ctx.spec.category == Category::TreeQuality ||
+      ctx.spec.category == Category::Complexity)
+    ctx.scene.reference("bvh");
 }
 
 using Clock = std::chrono::steady_clock;
@@ -256,7 +258,8 @@ Scorecard run_grade(const GradeSettings& settings) {
     r.seconds = seconds_since(check_start);
     if (last_use[spec.scene] == i) scenes.erase(spec.scene);
     if (!spec.second_scene.empty() && last_use[spec.second_scene] == i) scenes.erase(spec.second_scene);
-    if (spec.category == Category::Performance || spec.category == Category::TreeQuality)
+    if (spec.category == Category::Performance || spec.category == Category::TreeQuality ||
+        spec.category == Category::Complexity)
       card.performance[spec.name] = r.figures;
     card.checks.push_back(std::move(r));
     done[spec.name] = &card.checks.back();

@@ -125,6 +125,7 @@ std::vector<std::string_view> parameters_of(Category c) {
     case Category::TreeQuality: return {"rays", "count", "thresholds"};
     case Category::DeepTree: return {"count", "reference", "origin"};
     case Category::BatchCalls: return {"rays", "count", "reference"};
+    case Category::Complexity: return {"rays", "count", "second_scene", "thresholds"};
   }
   return {};
 }
@@ -141,6 +142,9 @@ Thresholds thresholds_of(const JsonNode& node, Category category) {
     if (auto n = node.optional_member("min_speed_vs_bvh")) t.min_speed_vs_bvh = ratio(*n);
     if (auto n = node.optional_member("min_speed_vs_embree_fast")) t.min_speed_vs_embree_fast = ratio(*n);
     if (auto n = node.optional_member("max_build_seconds")) t.max_build_seconds = ratio(*n);
+  } else if (category == Category::Complexity) {
+    node.expect_object({"max_growth_exponent"});
+    if (auto n = node.optional_member("max_growth_exponent")) t.max_growth_exponent = ratio(*n);
   } else {
     node.expect_object({"max_sah_ratio", "max_nodes_per_ray_ratio", "max_primitives_per_ray_ratio"});
     if (auto n = node.optional_member("max_sah_ratio")) t.max_sah_ratio = ratio(*n);
@@ -239,6 +243,8 @@ CheckSpec parse_check(const JsonNode& node, const Defaults& defaults, const Suit
     c.second_scene = n->as_string();
     if (suite.scenes.count(c.second_scene) == 0) n->fail(fmt::format("no scene '{}' in \"scenes\"", c.second_scene));
   }
+  if (c.category == Category::Complexity && c.second_scene.empty())
+    node.fail("a complexity check needs \"second_scene\": the same kind of scene with several (the bundled suites: 16) times the primitives");
   if (auto n = node.optional_member("threads")) c.threads = static_cast<int>(n->as_integer(2, 64));
   if (auto n = node.optional_member("repeat")) c.repeat = static_cast<int>(n->as_integer(1, 100));
   if (auto n = node.optional_member("min_seconds")) {

@@ -41,10 +41,13 @@ struct Thresholds {
   std::optional<double> max_sah_ratio;
   std::optional<double> max_nodes_per_ray_ratio;
   std::optional<double> max_primitives_per_ray_ratio;
+  // complexity: the largest growth exponent allowed, log(time per ray on the scaled scene / on the scene) over
+  // log(their primitive counts' ratio); 0.7 when absent (check_complexity.cpp says why).
+  std::optional<double> max_growth_exponent;
 
   bool any() const {
     return min_speed_vs_bvh || min_speed_vs_embree_fast || max_build_seconds || max_sah_ratio ||
-           max_nodes_per_ray_ratio || max_primitives_per_ray_ratio;
+           max_nodes_per_ray_ratio || max_primitives_per_ray_ratio || max_growth_exponent;
   }
 };
 

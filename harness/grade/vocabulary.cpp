@@ -29,6 +29,7 @@ std::string_view to_string(Category c) {
     case Category::TreeQuality: return "tree-quality";
     case Category::DeepTree: return "deep-tree";
     case Category::BatchCalls: return "batch-calls";
+    case Category::Complexity: return "complexity";
   }
   return "?";
 }

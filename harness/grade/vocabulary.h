@@ -31,6 +31,7 @@ enum class Category {
   TreeQuality,
   DeepTree,
   BatchCalls,  // the plugin's optional intersect_batch / occluded_batch; not applicable to a plugin without them
+  Complexity,  // how time per ray grows from a scene to one with several times the primitives (check_complexity.cpp)
 };
 
 enum class Visibility { Visible, Hidden, AfterDueDate, AfterPublished };
@@ -41,7 +42,7 @@ inline constexpr Category kAllCategories[] = {
     Category::Build,       Category::ClosestHit,   Category::AnyHit,      Category::RayInterval,
     Category::AxisAligned, Category::Watertight,   Category::Spheres,     Category::Ties,
     Category::ThreadSafety, Category::Determinism, Category::Performance, Category::TreeQuality,
-    Category::DeepTree,    Category::BatchCalls};
+    Category::DeepTree,    Category::BatchCalls,   Category::Complexity};
 
 std::string_view to_string(Outcome o);
 std::string_view to_string(Category c);

@@ -35,6 +35,14 @@
 //   7 TIE_T_ONLY          equal t keeps the first hit found (t compared alone, the ids never)
 //   8 PRUNE_NO_SLACK      nodes pruned against the best t itself (kTieSlack 0): a flat leaf entered at the
 //                         float t of a copy found first, rounded a few ulps later by the slab, is skipped
+//   9 RCP_NO_NEWTON       the reciprocal direction by rcpps (12 bits) without the Newton-Raphson step that
+//                         makes it a float's (what -ffast-math / -mrecip turn 1.0f / x into): box planes off by
+//                         up to 3 parts in 2^13 of their distance
+//  10 FTZ_LEFT_SET        build sets MXCSR's flush-to-zero and denormals-are-zero bits "for speed" and leaves
+//                         them set: every later float operation of the process (the host's too, in process)
+//                         flushes subnormals to zero
+//  11 BATCH_WRITES_PAST   occluded_batch answers 4 rays at a time and stores each group's 4 bytes whole, also
+//                         for a last group of fewer rays: up to 3 bytes written past the caller's array
 
 #include "twinray_plugin.h"
 
@@ -159,7 +167,15 @@ Ray make_ray(const twinray_ray& r) {
   Ray ray;
   ray.org = {r.org[0], r.org[1], r.org[2]};
   ray.dir = {r.dir[0], r.dir[1], r.dir[2]};
+#if BUG(9)
+  {
+    alignas(16) float inv[4];
+    _mm_store_ps(inv, _mm_rcp_ps(_mm_setr_ps(r.dir[0], r.dir[1], r.dir[2], 1.0f)));  // "fast reciprocal"
+    ray.inv = {inv[0], inv[1], inv[2]};
+  }
+#else
   ray.inv = {1.0f / r.dir[0], 1.0f / r.dir[1], 1.0f / r.dir[2]};  // +-inf for +-0: the slab handles it
+#endif
   ray.tmin = r.tmin;
   ray.tmax = r.tmax;
   ray.near_x = std::signbit(r.dir[0]) ? 1 : 0;
@@ -449,6 +465,9 @@ std::uint32_t Bvh4::collapse(const BinNode& n) {
 }
 
 int Bvh4::build(const twinray_geometry& g, char* error, std::size_t capacity) {
+#if BUG(10)
+  _mm_setcsr(_mm_getcsr() | 0x8040);  // FTZ | DAZ: "denormals are slow"; never restored
+#endif
   std::size_t total = g.sphere_count;
   for (std::size_t m = 0; m < g.mesh_count; ++m) total += g.meshes[m].triangle_count;
   if (total >= (1u << 29)) {  // a leaf reference keeps the first primitive in 29 bits
@@ -714,7 +733,15 @@ void bvh4_intersect_batch(const void* self, const twinray_ray* rays, twinray_hit
 void bvh4_occluded_batch(const void* self, const twinray_ray* rays, unsigned char* occluded, std::size_t count,
                          twinray_query_stats* stats) {
   const Bvh4& bvh = *static_cast<const Bvh4*>(self);
+#if BUG(11)
+  for (std::size_t i = 0; i < count; i += 4) {  // 4 rays, one 32-bit store
+    unsigned char group[4] = {0, 0, 0, 0};
+    for (std::size_t k = 0; k < 4 && i + k < count; ++k) group[k] = bvh.occluded(make_ray(rays[i + k]), *stats) ? 1 : 0;
+    std::memcpy(occluded + i, group, 4);
+  }
+#else
   for (std::size_t i = 0; i < count; ++i) occluded[i] = bvh.occluded(make_ray(rays[i]), *stats) ? 1 : 0;
+#endif
 }
 
 void bvh4_build_stats(const void* self, twinray_build_stats* s) { static_cast<const Bvh4*>(self)->stats(*s); }

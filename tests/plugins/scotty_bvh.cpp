@@ -185,6 +185,17 @@
 //                       negations, and it still claims watertightness
 //  93 PARALLEL_STRICT   a ray parallel to a slab must be strictly inside it (`o <= lo || o >= hi` rejects): a
 //                       ray in the plane of a box face (a wall's own plane, a flat box) misses it
+//  94 SAH_VOLUME        the SAH weighs the children by their boxes' volume, not their surface area ("the
+//                       probability of hitting a box"): a valid but poorer tree; a flat box has volume 0, so
+//                       on a planar mesh no split ever beats the leaf and ranges split by count in list order
+//  95 PIVOT_FIRST       no SAH: the range is partitioned around its first primitive's centroid on the longest
+//                       axis (one quicksort step, "about the median"): on input sorted along that axis the
+//                       pivot is the smallest, every split peels off its equals, and the tree degenerates
+//                       towards a list (traversal stacks sized to the tree, so only speed suffers)
+//  96 NO_BEST_T_PRUNE   the closest-hit traversal clips its box tests to [tmin, tmax] only, never to the
+//                       closest hit so far, and pops every pending node: right answers, more nodes visited
+//  97 SPHERE_ANYHIT_T0  any-hit tests spheres from t = 0 ("a shadow ray starts at its surface"), triangles
+//                       from tmin: a sphere root between 0 and tmin occludes
 //
 // Triangles use the watertight test of Woop, Benthin and Wald (JCGT 2013) in double precision, so the plugin
 // can claim TWINRAY_PLUGIN_WATERTIGHT; equal t resolves to the lower (geom_id, prim_id), so it claims
@@ -256,6 +267,13 @@ struct BBox {
   }
   bool empty() const { return min.x > max.x; }
   Vec3 center() const { return 0.5 * (min + max); }
+#if BUG(94)
+  double volume() const {
+    if (empty()) return 0.0;
+    const Vec3 e = max - min;
+    return e.x * e.y * e.z;
+  }
+#endif
   double surface_area() const {
     if (empty()) return 0.0;
     const Vec3 e = max - min;
@@ -808,6 +826,9 @@ class BVH {
     std::array<StackEntry, 64> stack;  // "64 levels is more than any tree needs"
 #elif BUG(67)
     std::array<StackEntry, 32> stack;  // a ring: "when it is full, the oldest entry is the least useful"
+#elif BUG(95)
+    thread_local std::vector<StackEntry> stack;  // as deep as the tree
+    if (stack.size() < depth_ + 2) stack.resize(depth_ + 2);
 #else
     std::array<StackEntry, kMaxDepth + 1> stack;
 #endif
@@ -832,6 +853,8 @@ class BVH {
       if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) break;  // "everything below it is farther"
 #elif BUG(91)
       if (closest.hit && e.entry > closest.t) continue;  // "beyond the closest hit"
+#elif BUG(96)
+      // every pending node is opened: "the leaf test already rejects hits beyond the closest"
 #else
       if (closest.hit && e.entry > closest.t * (1.0 + 1e-6)) continue;
 #endif
@@ -903,6 +926,8 @@ class BVH {
       const double limit = closest.hit && !e.stale ? closest.t * (1.0 + 1e-6) : bound;
 #elif BUG(91)
       const double limit = closest.hit ? closest.t : bound;
+#elif BUG(96)
+      const double limit = bound;  // the ray's own tmax
 #else
       const double limit = closest.hit ? closest.t * (1.0 + 1e-6) : bound;
 #endif
@@ -1005,7 +1030,12 @@ class BVH {
     thread_local std::size_t last_occluder = static_cast<std::size_t>(-1);
     if (last_occluder < primitives_.size() && primitives_[last_occluder].hit(ray, INFINITY).hit) return true;
 #endif
+#if BUG(95)
+    thread_local std::vector<std::size_t> stack;  // as deep as the tree
+    if (stack.size() < depth_ + 2) stack.resize(depth_ + 2);
+#else
     std::array<std::size_t, kMaxDepth + 1> stack;
+#endif
     std::size_t sp = 0;
     stack[sp++] = 0;
     ++stats.nodes_visited;
@@ -1025,6 +1055,14 @@ class BVH {
 #if BUG(90)
           if (primitives_[i].sphere != nullptr) {
             if (ball_overlaps(primitives_[i], ray, tmax)) return true;
+            continue;
+          }
+#endif
+#if BUG(97)
+          if (primitives_[i].sphere != nullptr) {
+            Ray from_zero = ray;  // "a shadow ray starts at its surface"
+            from_zero.tmin = 0.0;
+            if (primitives_[i].hit(from_zero, tmax).hit) return true;
             continue;
           }
 #endif
@@ -1223,15 +1261,23 @@ class BVH {
     const std::size_t size = end - start;
     if (size <= kMaxLeafSize) return index;
 
+#if BUG(94)
+    double best_cost = static_cast<double>(size) * box.volume();  // "the chance that a ray hits a box is its volume"
+#else
     double best_cost = static_cast<double>(size) * box.surface_area();  // cost of a leaf
+#endif
     int best_axis = -1;
     double best_split = 0.0;
     // The SAH cost of a split into two non-empty sides; the cheapest so far is kept.
     const auto consider = [&](int axis, double plane, const BBox& left, std::size_t nl, const BBox& right,
                               std::size_t nr) {
       if (nl == 0 || nr == 0) return;
+#if BUG(94)
+      const double cost = box.volume() + static_cast<double>(nl) * left.volume() + static_cast<double>(nr) * right.volume();
+#else
       const double cost = box.surface_area() + static_cast<double>(nl) * left.surface_area() +
                           static_cast<double>(nr) * right.surface_area();
+#endif
       if (cost < best_cost) {
         best_cost = cost;
         best_axis = axis;
@@ -1245,6 +1291,25 @@ class BVH {
     state ^= state >> 7;
     state ^= state << 17;
     const int random_axis = static_cast<int>(state % 3);
+#endif
+#if BUG(95)
+    {
+      // One quicksort step around the range's first primitive, on the centroids' longest axis.
+      const Vec3 ext = centroids.max - centroids.min;
+      const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+      const double pivot = primitives_[start].bbox().center()[axis];
+      std::size_t mid = start + size / 2;  // every centroid equal to the pivot: a split by count
+      const auto it = std::partition(primitives_.begin() + static_cast<std::ptrdiff_t>(start),
+                                     primitives_.begin() + static_cast<std::ptrdiff_t>(end),
+                                     [&](const Primitive& p) { return p.bbox().center()[axis] <= pivot; });
+      const std::size_t split_at = static_cast<std::size_t>(it - primitives_.begin());
+      if (split_at != start && split_at != end) mid = split_at;
+      const std::size_t l = build_node(start, mid, depth + 1);
+      const std::size_t r = build_node(mid, end, depth + 1);
+      nodes_[index].l = l;
+      nodes_[index].r = r;
+      return index;
+    }
 #endif
     if (depth < kMaxDepth / 2) {
       for (int axis = 0; axis < 3; ++axis) {

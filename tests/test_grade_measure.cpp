@@ -1,0 +1,57 @@
+// The measuring checks of `twinray grade` (twelfth round, docs/grading.md): `performance` times a plugin's batch
+// functions beside its single-ray ones and any hit beside closest hit, per ray kind; `complexity` tells a tree
+// from a list by how time per ray grows with the primitive count. Graded with tests/suites/grading.
+
+#include "harness/grade/grade_run.h"
+#include "harness/grade/reports.h"
+#include "tests/grade_test_util.h"
+
+#include <gtest/gtest.h>
+
+namespace twinray::grade {
+namespace {
+
+using testing::check_named;
+using testing::scotty_plugin;
+
+std::filesystem::path test_plugin(const std::string& file) {
+  return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) / file;
+}
+
+TEST(GradeMeasure, PerformanceTimesTheBatchPathOnlyWhenThePluginHasOne) {
+  const Scorecard with = testing::grade_with_test_suite(test_plugin("libtwinray_bvh4_plugin.so"), {"performance-soup"});
+  const nlohmann::json& f = check_named(with, "performance-soup").figures;
+  EXPECT_EQ(f["judged_path"], "batch");
+  EXPECT_GT(f["rays_per_second"]["plugin_batch"].get<double>(), 0.0) << f.dump();
+  EXPECT_GT(f["speed_vs_bvh_batch"].get<double>(), 0.0);
+  EXPECT_GT(f["any_hit"]["rays_per_second"]["plugin"].get<double>(), 0.0);
+  EXPECT_GT(f["per_kind"]["camera"]["any"]["bvh"].get<double>(), 0.0);
+  EXPECT_TRUE(with.performance.contains("performance-soup"));
+
+  const Scorecard without = testing::grade_with_test_suite(scotty_plugin(), {"performance-soup"});
+  const nlohmann::json& g = check_named(without, "performance-soup").figures;
+  EXPECT_EQ(g["judged_path"], "single");
+  EXPECT_TRUE(g["rays_per_second"]["plugin_batch"].is_null()) << g.dump();
+  EXPECT_TRUE(g["speed_vs_bvh_batch"].is_null());
+  EXPECT_GT(g["rays_per_second"]["plugin"].get<double>(), 0.0);  // the key's meaning since the first round
+}
+
+TEST(GradeMeasure, ComplexityTellsATreeFromBruteForce) {
+  const Scorecard tree = testing::grade_with_test_suite(scotty_plugin(), {"complexity-grid"});
+  const CheckResult& t = check_named(tree, "complexity-grid");
+  EXPECT_EQ(t.outcome, Outcome::Pass) << terminal_check_line(t);
+  EXPECT_LT(t.figures["closest"]["growth_exponent"].get<double>(), 0.7);
+  EXPECT_TRUE(tree.performance.contains("complexity-grid"));
+
+  const Scorecard brute = testing::grade_with_test_suite(test_plugin("libtwinray_brute_plugin.so"), {"complexity-grid"});
+  const CheckResult& b = check_named(brute, "complexity-grid");
+  EXPECT_EQ(b.outcome, Outcome::Fail) << terminal_check_line(b);
+  EXPECT_GT(b.figures["closest"]["growth_exponent"].get<double>(), 0.7) << terminal_check_line(b);
+  EXPECT_NE(b.detail.find("brute force or a tree degenerated"), std::string::npos) << b.detail;
+  EXPECT_FALSE(b.reproduce.empty());
+  EXPECT_TRUE(brute.passed());  // not required, worth 0 in the test suite
+
+}
+
+}  // namespace
+}  // namespace twinray::grade
