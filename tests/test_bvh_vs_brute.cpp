@@ -9,6 +9,7 @@
 #include "backends/wide/wide_backend.h"
 #include "core/sampling/rng.h"
 #include "core/scene/procedural.h"
+#include "coplanar_tiles_test_util.h"
 #include "ray_test_util.h"
 
 #include <glm/geometric.hpp>
@@ -200,28 +201,20 @@ TEST(BvhVsBrute, DuplicatedGeometryResolvesTiesByLowestIds) {
 // every crossing is a tie between triangles in different leaves, whose flat boxes the ray enters (and
 // leaves) exactly at the tie's t.
 SceneGeometry overlapping_coplanar_tiles() {
-  SceneGeometry g;
-  TriangleMesh mesh;
   Rng rng(12, 0);
-  for (int k = 0; k < 400; ++k) {
-    const glm::vec3 c(2.0f * rng.next_float() - 1.0f, 2.0f * rng.next_float() - 1.0f, 0.3f);
-    const auto first = static_cast<std::uint32_t>(mesh.positions.size());
-    mesh.positions.push_back(c + glm::vec3(-0.6f * rng.next_float() - 0.2f, -0.3f, 0.0f));
-    mesh.positions.push_back(c + glm::vec3(0.6f * rng.next_float() + 0.2f, -0.3f, 0.0f));
-    mesh.positions.push_back(c + glm::vec3(0.0f, 0.6f * rng.next_float() + 0.2f, 0.0f));
+  const std::vector<glm::vec3> corners = test::overlapping_tile_corners(rng, 400);
+  TriangleMesh mesh;
+  mesh.positions = corners;
+  for (std::uint32_t first = 0; first < corners.size(); first += 3) {
     mesh.indices.push_back({first, first + 1, first + 2});
   }
   mesh.positions.reserve(mesh.positions.size() + 1);
+  SceneGeometry g;
   g.meshes.push_back(mesh);
   return g;
 }
-// Rays from above towards the tiles, most of them crossing several.
-Ray ray_towards_tiles(Rng& rays) {
-  Ray ray;
-  ray.org = {2.0f * rays.next_float() - 1.0f, 2.0f * rays.next_float() - 1.0f, 1.0f + rays.next_float()};
-  ray.dir = {0.7f * rays.next_float() - 0.35f, 0.7f * rays.next_float() - 0.35f, -0.5f - rays.next_float()};
-  return ray;
-}
+using test::ray_towards_tiles;
+
 BvhBuildOptions bvh_one_per_leaf() {
   BvhBuildOptions options;
   options.max_leaf_size = 1;
