@@ -75,7 +75,11 @@ INSTANTIATE_TEST_SUITE_P(
         // Equal t keeps the first copy found: the claimed tie rule is broken.
         Bvh4Bug{"tie-t-only", "ties-duplicates", Outcome::Fail, "answers wrong", "closest-soup"},
         // Pruning against the best t itself: the copy with the lowest prim_id in another flat leaf is skipped.
-        Bvh4Bug{"prune-no-slack", "ties-duplicates-box", Outcome::Fail, "answers wrong", "ties-duplicates"}),
+        Bvh4Bug{"prune-no-slack", "ties-duplicates-box", Outcome::Fail, "answers wrong", "ties-duplicates"},
+        // occluded_batch stores a last group of fewer than 4 answers whole: the worker's guard bytes after the
+        // answers catch it (every answer is right; the single-ray checks never call it).
+        Bvh4Bug{"batch-writes-past", "batch-calls-cornell", Outcome::Fail, "wrote past its answers",
+                "closest-soup"}),
     [](const ::testing::TestParamInfo<Bvh4Bug>& param) {
       std::string name = param.param.bug;
       for (char& c : name)
@@ -95,6 +99,20 @@ TEST(GradeBvh4, WrongVisitOrderKeepsEveryAnswerRight) {
   EXPECT_EQ(check_named(card, "closest-soup").outcome, Outcome::Pass) << check_lines(card);
   EXPECT_EQ(check_named(card, "tree-quality-soup").outcome, Outcome::Pass) << check_lines(card);
   EXPECT_GT(per_ray(card, "primitives_per_ray"), per_ray(good, "primitives_per_ray")) << check_lines(card);
+}
+
+// Flush-to-zero and denormals-are-zero set in build and left set: no bundled ray reaches a subnormal, so every
+// answer is right, but the ABI says a call leaves the floating-point environment as it found it (in process it
+// would change the host's arithmetic). The worker compares the control bits around every call.
+TEST(GradeBvh4, FloatingPointEnvironmentLeftChangedIsAContractViolation) {
+  const Scorecard card = grade_bvh4(bvh4_plugin("ftz-left-set"), {"closest-soup"});
+  const CheckResult& caught = check_named(card, "closest-soup");
+  EXPECT_EQ(caught.outcome, Outcome::Fail) << check_lines(card);
+  EXPECT_EQ(caught.points, 0.0);
+  EXPECT_NE(caught.detail.find("left the floating-point environment changed in build"), std::string::npos)
+      << caught.detail;
+  EXPECT_NE(caught.detail.find("flush-to-zero set, denormals-are-zero set"), std::string::npos) << caught.detail;
+  EXPECT_FALSE(card.passed());
 }
 
 // A batch path that carries the previous ray's closest t over as the next ray's bound. The answer checks call

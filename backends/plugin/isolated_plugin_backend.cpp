@@ -419,7 +419,10 @@ void IsolatedPluginBackend::Impl::check_answer(const Lease& lease, pw::Op op, st
   const pw::Status status = c.status;
   const bool query = op == pw::Op::Intersect || op == pw::Op::Occluded || op == pw::Op::IntersectBatch ||
                      op == pw::Op::OccludedBatch;
+  const bool batch = op == pw::Op::IntersectBatch || op == pw::Op::OccludedBatch;
   const bool possible = status == pw::Status::Ok || status == pw::Status::Exception || status == pw::Status::OutOfMemory ||
+                        status == pw::Status::FpEnvironmentChanged ||
+                        (batch && status == pw::Status::WriteOutOfBounds) ||
                         (!query && (status == pw::Status::BuildFailed || status == pw::Status::SetupFailed));
   if (!possible) fail_corrupted(lease, stage, fmt::format("status {}", static_cast<std::uint32_t>(status)));
   // The worker sets `current` to every ray's index in turn, so an answered batch ends on its last ray.
@@ -602,6 +605,18 @@ void IsolatedPluginBackend::Impl::fail_from_status(const Lease& lease, Stage sta
     case pw::Status::OutOfMemory:
       d.cause = "out-of-memory";
       d.detail = message.empty() ? "std::bad_alloc" : message;
+      break;
+    case pw::Status::FpEnvironmentChanged:
+      // The worker put the bits back, but the plugin broke the ABI's promise (docs/plugin-abi.md, "Floating
+      // point"): in process it would have changed the host's arithmetic.
+      d.kind = PluginFailureKind::ContractViolation;
+      d.cause = "fp-environment";
+      d.detail = message;
+      break;
+    case pw::Status::WriteOutOfBounds:
+      d.kind = PluginFailureKind::ContractViolation;
+      d.cause = "out-of-bounds-write";
+      d.detail = message;
       break;
     case pw::Status::SetupFailed:
       end_worker();

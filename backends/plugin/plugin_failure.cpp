@@ -23,6 +23,8 @@ std::string what_happened(const PluginFailureDetails& f) {
   if (f.cause == "timeout") return "timed out";
   if (f.cause == "exception") return "let a C++ exception escape";
   if (f.cause == "bad-hit") return "broke the plugin contract";
+  if (f.cause == "fp-environment") return "left the floating-point environment changed";
+  if (f.cause == "out-of-bounds-write") return "wrote past its answers";
   if (f.cause == "corrupted") return "wrote over the worker's shared memory";
   if (f.cause == "load") return "failed while loading";
   return f.cause;

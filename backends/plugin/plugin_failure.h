@@ -15,6 +15,11 @@
 //          "timeout"       one call over PluginLimits::query_seconds / build_seconds, or past the deadline
 //          "exception"     a C++ exception escaped through the C ABI
 //          "bad-hit"       a hit on a geometry or primitive that does not exist (kind ContractViolation)
+//          "fp-environment" a call returned with other floating-point control bits (flush-to-zero,
+//                          denormals-are-zero, rounding, exception masks) than it was called with (kind
+//                          ContractViolation; isolated plugins only: the worker compares them)
+//          "out-of-bounds-write" a batch call wrote past the answers it was given (kind ContractViolation;
+//                          isolated plugins only: guard bytes after the worker's answer arrays)
 //          "corrupted"     an answer in the shared memory that the worker cannot give (a sequence number,
 //                          status, count or flag outside the protocol of worker_protocol.h): the plugin, which
 //                          runs in the worker's process, wrote over it (kind Crash)

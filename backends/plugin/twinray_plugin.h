@@ -23,6 +23,8 @@
  *    spheres prim_id is 0, ng is the outward unit normal, u = phi/(2 pi) in [0,1) with
  *    phi = atan2(n.z, n.x) and v = theta/pi with theta = acos(n.y).
  *  - Plugin code must not let a C++ exception or a longjmp escape through this interface.
+ *  - Every call returns with the floating-point control bits it was called with (MXCSR's flush-to-zero,
+ *    denormals-are-zero, rounding mode, exception masks), and a batch call writes its count answers only.
  *
  * Versioning: abi_version is the first member of every version of the table, so a loader can read it
  * before it trusts anything else. Any change to a struct or a signature increments

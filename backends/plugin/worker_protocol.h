@@ -24,7 +24,7 @@
 namespace twinray::plugin_worker {
 
 inline constexpr std::uint32_t kMagic = 0x7477726bu;  // "twrk"
-inline constexpr std::uint32_t kProtocolVersion = 4;
+inline constexpr std::uint32_t kProtocolVersion = 5;
 
 // File descriptors of the worker: 0 /dev/null, 1 and 2 the output pipe, kControlFd the memfd, kLifelineFd the
 // read end of a pipe whose write end only the parent holds (EOF: the parent is gone, the worker exits).
@@ -71,6 +71,9 @@ enum class Status : std::uint32_t {
   Exception = 2,     // a C++ exception escaped from plugin code; message holds what()
   OutOfMemory = 3,   // std::bad_alloc escaped from plugin code
   SetupFailed = 4,   // the worker could not do its own part (map the scene, install the filter); message says why
+  // Contract violations the worker sees (protocol v5); message says what:
+  FpEnvironmentChanged = 5,  // the call returned with other floating-point control bits (fp_environment.h)
+  WriteOutOfBounds = 6,      // a batch call wrote past the answers it was given (the worker's guard bytes)
 };
 
 // Header::startup, a futex word the parent waits on after spawning the worker.

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include "backends/plugin/worker/fp_environment.h"
+
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -42,6 +44,7 @@ twinray_hit miss() {
 template <typename F>
 void guarded(Channel& c, F&& call) {
   c.in_plugin.store(1, std::memory_order_relaxed);
+  const std::uint32_t fp_before = fp_control_bits();
   try {
     call();
   } catch (const std::bad_alloc& e) {
@@ -55,6 +58,37 @@ void guarded(Channel& c, F&& call) {
     copy_message(c.message, sizeof c.message, "an exception not derived from std::exception");
   }
   c.in_plugin.store(0, std::memory_order_relaxed);
+  const std::uint32_t fp_after = fp_control_bits();
+  if (fp_after != fp_before) {
+    restore_fp_control_bits(fp_before);
+    if (c.status == Status::Ok) {
+      c.status = Status::FpEnvironmentChanged;
+      copy_message(c.message, sizeof c.message, describe_fp_change(fp_before, fp_after).c_str());
+    }
+  }
+}
+
+// Guard entries after the answers a batch call is given: filled with kGuardByte before the call and compared
+// after it, so a plugin that stores past its `count` answers (a last group of a SIMD width written whole) is
+// caught where it would otherwise write into unused room or the next call's answers unseen. As many as a
+// 16-lane store can overrun.
+constexpr std::size_t kGuardHits = 16;
+constexpr std::size_t kGuardFlags = 64;
+constexpr unsigned char kGuardByte = 0xA5;
+
+// The first guard byte that is no longer kGuardByte, or -1.
+std::ptrdiff_t first_overwritten(const void* guard, std::size_t bytes) {
+  const auto* p = static_cast<const unsigned char*>(guard);
+  for (std::size_t i = 0; i < bytes; ++i)
+    if (p[i] != kGuardByte) return static_cast<std::ptrdiff_t>(i);
+  return -1;
+}
+
+void write_out_of_bounds(Channel& c, const char* function, std::uint32_t count, std::ptrdiff_t byte) {
+  c.status = Status::WriteOutOfBounds;
+  const std::string what = std::string(function) + " wrote past the " + std::to_string(count) +
+                           " answers it was given (byte " + std::to_string(byte) + " after the last)";
+  copy_message(c.message, sizeof c.message, what.c_str());
 }
 
 }  // namespace
@@ -164,8 +198,8 @@ void QueryServer::run_batch(Channel& c, bool closest) {
   // The plugin's own copies of the rays and room for its answers: twinray does not touch the channel during
   // the call, but the plugin gets private buffers as the in-process backend gives it (a stack array there).
   twinray_ray rays[kBatchCallRays];
-  twinray_hit hits[kBatchCallRays];
-  unsigned char occluded[kBatchCallRays];
+  twinray_hit hits[kBatchCallRays + kGuardHits];
+  unsigned char occluded[kBatchCallRays + kGuardFlags];
   twinray_query_stats stats{};
   guarded(c, [&] {
     for (std::uint32_t begin = 0; begin < n; begin += static_cast<std::uint32_t>(kBatchCallRays)) {
@@ -175,14 +209,24 @@ void QueryServer::run_batch(Channel& c, bool closest) {
       errno = 0;  // see crash_recorder.cpp
       if (closest) {
         for (std::uint32_t k = 0; k < count; ++k) hits[k] = miss();
+        std::memset(hits + count, kGuardByte, kGuardHits * sizeof(twinray_hit));
         table.intersect_batch(self, rays, hits, count, &stats);
+        if (const std::ptrdiff_t at = first_overwritten(hits + count, kGuardHits * sizeof(twinray_hit)); at >= 0) {
+          write_out_of_bounds(c, "intersect_batch", count, at);
+          return;
+        }
         for (std::uint32_t k = 0; k < count; ++k) {
           c.results[begin + k].hit = hits[k];
           c.results[begin + k].found = hits[k].geom_id != TWINRAY_INVALID_ID ? 1 : 0;
         }
       } else {
         std::memset(occluded, 0, count);
+        std::memset(occluded + count, kGuardByte, kGuardFlags);
         table.occluded_batch(self, rays, occluded, count, &stats);
+        if (const std::ptrdiff_t at = first_overwritten(occluded + count, kGuardFlags); at >= 0) {
+          write_out_of_bounds(c, "occluded_batch", count, at);
+          return;
+        }
         for (std::uint32_t k = 0; k < count; ++k) c.results[begin + k].found = occluded[k] != 0 ? 1 : 0;
       }
     }

@@ -1,8 +1,10 @@
 #pragma once
 // The worker's side of the channels (worker_protocol.h): one thread per channel waits for a request, calls
-// the plugin and answers. Queries are made one ray at a time through intersect1 / occluded1, with the ray's
-// index in shared memory before each call, so a crash or a hang is attributed to exactly one ray. (The
-// optional batch entry points are not used here: a crash inside one could not be attributed.)
+// the plugin and answers. Single-ray requests go through intersect1 / occluded1, with the ray's index in
+// shared memory before each call, so a crash or a hang is attributed to exactly one ray; batch requests go
+// through intersect_batch / occluded_batch in calls of kBatchCallRays rays, attributed to the call's first ray.
+// After every call the worker checks what the plugin must leave alone: the floating-point control bits
+// (fp_environment.h) and, for batch calls, guard bytes after the answers.
 
 #include "backends/plugin/plugin_library.h"
 #include "backends/plugin/worker_protocol.h"
