@@ -17,6 +17,7 @@
 // (when the plugin counts them) are reported beside it, not judged: a plugin's own counts are not evidence.
 
 #include "harness/grade/checks.h"
+#include "harness/grade/timed_query.h"
 
 #include <fmt/core.h>
 
@@ -36,16 +37,6 @@ constexpr int kRounds = 7;
 constexpr int kMinRounds = 1;
 constexpr double kRoundsSeconds = 2.0;
 constexpr double kDefaultMaxExponent = 0.7;
-
-double seconds_of(const Backend& backend, std::span<const Ray> rays, bool any_hit, QueryStats& stats) {
-  std::vector<Hit> hits(any_hit ? 0 : rays.size());
-  std::vector<std::uint8_t> occluded(any_hit ? rays.size() : 0);
-  stats = {};
-  const auto start = std::chrono::steady_clock::now();
-  if (any_hit) backend.occluded(rays, std::span<std::uint8_t>(occluded), &stats);
-  else backend.intersect(rays, std::span<Hit>(hits), &stats);
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 double primitives_of(const GradeScene& s) {
   return static_cast<double>(s.geometry().triangle_count() + s.geometry().sphere_count());
@@ -73,8 +64,8 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
   for (int s = 0; s < 2; ++s)
     for (int q = 0; q < 2; ++q) {
       QueryStats st;
-      seconds_of((s == 0 ? ctx.scene : big).reference("bvh"), rays[s], q == 1, st);
-      ref[s][q] = static_cast<double>(st.nodes_visited) / static_cast<double>(std::max<std::size_t>(rays[s].size(), 1));
+      time_one_run((s == 0 ? ctx.scene : big).reference("bvh"), rays[s], q == 1, st);
+      ref[s][q] = per_ray(st.nodes_visited, rays[s].size());
     }
 
   PluginInstance plugin = ctx.built_plugin();  // instance 0 on the scene, 1 on second_scene
@@ -92,15 +83,15 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
       plugin.use_instance(static_cast<std::size_t>(s));
       for (int q = 0; q < 2; ++q) {
         QueryStats st;
-        t[s][q] = seconds_of(*plugin, rays[s], q == 1, st);
+        t[s][q] = time_one_run(*plugin, rays[s], q == 1, st);
         best[s][q] = std::min(best[s][q], t[s][q]);
         if (q == 0) stats[s] = st;
       }
     }
-    for (int q = 0; q < 2; ++q)
-      round_growth[q].push_back(t[0][q] > 0.0 ? t[1][q] / static_cast<double>(std::max<std::size_t>(rays[1].size(), 1)) /
-                                                    (t[0][q] / static_cast<double>(std::max<std::size_t>(rays[0].size(), 1)))
-                                              : 0.0);
+    for (int q = 0; q < 2; ++q) {
+      const double small = per_ray(t[0][q], rays[0].size());
+      round_growth[q].push_back(small > 0.0 ? per_ray(t[1][q], rays[1].size()) / small : 0.0);
+    }
   }
   plugin.end();
 
@@ -112,8 +103,7 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
   std::vector<std::string> failed;
   std::string detail;
   for (int q = 0; q < 2; ++q) {
-    const double per[2] = {best[0][q] / static_cast<double>(std::max<std::size_t>(rays[0].size(), 1)),
-                           best[1][q] / static_cast<double>(std::max<std::size_t>(rays[1].size(), 1))};
+    const double per[2] = {per_ray(best[0][q], rays[0].size()), per_ray(best[1][q], rays[1].size())};
     // The median of the rounds' paired ratios: a wake-up delay of the worker on a busy machine (milliseconds,
     // against calls of a few) lands on one call of a pair, and the median drops it; the fastest run of each
     // scene would instead pair a lucky run of one with an unlucky run of the other.
@@ -136,9 +126,7 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
                                    query_names[q], e, max_e));
   }
   if (ctx.env.plugin.traits().counts_traversal) {
-    const auto nodes = [&](int s) {
-      return static_cast<double>(stats[s].nodes_visited) / static_cast<double>(std::max<std::size_t>(rays[s].size(), 1));
-    };
+    const auto nodes = [&](int s) { return per_ray(stats[s].nodes_visited, rays[s].size()); };
     v.figures["nodes_per_ray"] = {nodes(0), nodes(1)};
     detail += fmt::format("; {:.1f} and {:.1f} nodes per ray", nodes(0), nodes(1));
   }

@@ -12,12 +12,12 @@
 #include "harness/grade/answers.h"
 #include "harness/grade/checks.h"
 #include "harness/grade/grade_rays.h"
+#include "harness/grade/timed_query.h"
 #include "harness/grade/tree_cost.h"
 
 #include <fmt/core.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 namespace twinray::grade {
@@ -36,18 +36,8 @@ struct Timing {
 // Closest hits (any_hit false) or any-hit answers of `rays`, timed kTimedRuns times.
 Timing time_query(const Backend& backend, std::span<const Ray> rays, bool any_hit) {
   Timing t;
-  std::vector<Hit> hits(any_hit ? 0 : rays.size());
-  std::vector<std::uint8_t> occluded(any_hit ? rays.size() : 0);
-  double best = INFINITY;
-  for (int run = 0; run < kTimedRuns; ++run) {
-    QueryStats stats;
-    const auto start = std::chrono::steady_clock::now();
-    if (any_hit) backend.occluded(rays, std::span<std::uint8_t>(occluded), &stats);
-    else backend.intersect(rays, std::span<Hit>(hits), &stats);
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    t.stats = stats;
-  }
-  t.seconds = best;
+  t.seconds = INFINITY;
+  for (int run = 0; run < kTimedRuns; ++run) t.seconds = std::min(t.seconds, time_one_run(backend, rays, any_hit, t.stats));
   return t;
 }
 
@@ -62,10 +52,6 @@ struct KindTimes {
   std::vector<Ray> rays;
   Timing times[kPaths][2];
 };
-
-double per_ray(std::uint64_t total, std::size_t rays) {
-  return rays ? static_cast<double>(total) / static_cast<double>(rays) : 0.0;
-}
 
 // Appends "name value (limit)" to `failed` when a threshold is broken.
 void require(std::optional<double> limit, bool at_most, double value, const char* what, std::vector<std::string>& failed) {
