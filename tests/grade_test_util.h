@@ -11,18 +11,24 @@
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace twinray::testing {
 
-// The Scotty3D-style test BVH: "" for the correct one, else a bug's name ("first-hit", "shared-stack", ...;
-// tests/plugins/scotty_bvh.cpp lists them).
-inline std::filesystem::path scotty_plugin(std::string bug = "") {
+// A test plugin of tests/plugins/CMakeLists.txt: `family` "scotty", "bvh4", "lbvh", "brute", ...; `bug` "" for
+// the correct build, else a bug's name, with - or _ ("first-hit"; each plugin's source lists its bugs).
+inline std::filesystem::path test_plugin(const std::string& family, std::string bug = "") {
   for (char& c : bug)
     if (c == '-') c = '_';
   return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
-         (bug.empty() ? std::string("libtwinray_scotty_plugin.so") : "libtwinray_scotty_" + bug + "_plugin.so");
+         ("libtwinray_" + family + (bug.empty() ? "" : "_" + bug) + "_plugin.so");
 }
+
+// The Scotty3D-style test BVH (tests/plugins/scotty_bvh.cpp).
+inline std::filesystem::path scotty_plugin(std::string bug = "") { return test_plugin("scotty", std::move(bug)); }
+// The 4-wide SIMD test BVH (tests/plugins/bvh4_plugin.cpp).
+inline std::filesystem::path bvh4_plugin(std::string bug = "") { return test_plugin("bvh4", std::move(bug)); }
 
 inline std::filesystem::path student_kit_plugin() { return TWINRAY_TEST_STUDENT_KIT_PLUGIN; }
 

@@ -24,14 +24,10 @@
 namespace twinray::grade {
 namespace batch_test {  // named: the unity build puts several test files into one translation unit
 
+using testing::bvh4_plugin;
 using testing::check_lines;
 using testing::check_named;
 using test::failure_of;
-
-std::filesystem::path bvh4_plugin(const std::string& bug = "") {
-  return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
-         (bug.empty() ? std::string("libtwinray_bvh4_plugin.so") : "libtwinray_bvh4_" + bug + "_plugin.so");
-}
 
 PluginLimits short_limits() {
   PluginLimits limits;

@@ -18,13 +18,7 @@
 namespace twinray::grade {
 namespace bvh4_test {  // named: the unity build puts several test files into one translation unit
 
-std::filesystem::path bvh4_plugin(std::string bug = "") {
-  for (char& c : bug)
-    if (c == '-') c = '_';
-  return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
-         (bug.empty() ? std::string("libtwinray_bvh4_plugin.so") : "libtwinray_bvh4_" + bug + "_plugin.so");
-}
-
+using testing::bvh4_plugin;
 using testing::check_lines;
 using testing::check_named;
 Scorecard grade_bvh4(const std::filesystem::path& plugin, std::vector<std::string> only = {}) {

@@ -13,17 +13,13 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace twinray::grade {
 namespace lbvh_test {  // named: the unity build puts several test files into one translation unit
 
-std::filesystem::path lbvh_plugin(std::string bug = "") {
-  for (char& c : bug)
-    if (c == '-') c = '_';
-  return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) /
-         (bug.empty() ? std::string("libtwinray_lbvh_plugin.so") : "libtwinray_lbvh_" + bug + "_plugin.so");
-}
+std::filesystem::path lbvh_plugin(std::string bug = "") { return testing::test_plugin("lbvh", std::move(bug)); }
 
 using testing::check_lines;
 using testing::check_named;

@@ -12,14 +12,12 @@ namespace twinray::grade {
 namespace {
 
 using testing::check_named;
+using testing::bvh4_plugin;
 using testing::scotty_plugin;
-
-std::filesystem::path test_plugin(const std::string& file) {
-  return std::filesystem::path(TWINRAY_TEST_PLUGIN_DIR) / file;
-}
+using testing::test_plugin;
 
 TEST(GradeMeasure, PerformanceTimesTheBatchPathOnlyWhenThePluginHasOne) {
-  const Scorecard with = testing::grade_with_test_suite(test_plugin("libtwinray_bvh4_plugin.so"), {"performance-soup"});
+  const Scorecard with = testing::grade_with_test_suite(bvh4_plugin(), {"performance-soup"});
   const nlohmann::json& f = check_named(with, "performance-soup").figures;
   EXPECT_EQ(f["judged_path"], "batch");
   EXPECT_GT(f["rays_per_second"]["plugin_batch"].get<double>(), 0.0) << f.dump();
@@ -43,14 +41,13 @@ TEST(GradeMeasure, ComplexityTellsATreeFromBruteForce) {
   EXPECT_LT(t.figures["closest"]["growth_exponent"].get<double>(), 0.7);
   EXPECT_TRUE(tree.performance.contains("complexity-grid"));
 
-  const Scorecard brute = testing::grade_with_test_suite(test_plugin("libtwinray_brute_plugin.so"), {"complexity-grid"});
+  const Scorecard brute = testing::grade_with_test_suite(test_plugin("brute"), {"complexity-grid"});
   const CheckResult& b = check_named(brute, "complexity-grid");
   EXPECT_EQ(b.outcome, Outcome::Fail) << terminal_check_line(b);
   EXPECT_GT(b.figures["closest"]["growth_exponent"].get<double>(), 0.7) << terminal_check_line(b);
   EXPECT_NE(b.detail.find("brute force or a tree degenerated"), std::string::npos) << b.detail;
   EXPECT_FALSE(b.reproduce.empty());
   EXPECT_TRUE(brute.passed());  // not required, worth 0 in the test suite
-
 }
 
 }  // namespace
