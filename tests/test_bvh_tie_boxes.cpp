@@ -1,10 +1,11 @@
 // The closest-hit traversal's tie boxes (bvh_traversal.inl, pop_closest): a popped box entered exactly at
 // the best t so far must still be visited, since a primitive below it may tie at that t with a lower
 // (geom_id, prim_id) (a rule that skips such boxes by a per-subtree minimum key was tried in the twelfth
-// round and gained nothing: docs/bvh-backend.md). Adversarial scenes for the tie rule: the same coplanar tiles in three geometries, in different orders, so
-// that every crossing is a tie at one rounded t between several geometries and primitives in different
-// leaves, and the lowest key is sometimes found first and sometimes last; rays with their own interval and
-// with tmin = tmax = the tie's t; rays whose origin lies on a tile's edge plane.
+// round and gained nothing: docs/bvh-backend.md). Adversarial scenes for the tie rule: the same coplanar
+// tiles in three geometries, in different orders, so that every crossing is a tie at one rounded t between
+// several geometries and primitives in different leaves, and the lowest key is sometimes found first and
+// sometimes last; rays with their own interval and with tmin = tmax = the tie's t; rays whose origin lies
+// on a tile's edge plane.
 
 #include "backends/brute/brute_backend.h"
 #include "backends/bvh/bvh_backend.h"

@@ -417,9 +417,8 @@ void IsolatedPluginBackend::Impl::check_answer(const Lease& lease, pw::Op op, st
                    fmt::format("the request was changed to op {}, {} rays (posted: op {}, {} rays)", static_cast<std::uint32_t>(op_now),
                                count_now, static_cast<std::uint32_t>(op), count));
   const pw::Status status = c.status;
-  const bool query = op == pw::Op::Intersect || op == pw::Op::Occluded || op == pw::Op::IntersectBatch ||
-                     op == pw::Op::OccludedBatch;
   const bool batch = op == pw::Op::IntersectBatch || op == pw::Op::OccludedBatch;
+  const bool query = batch || op == pw::Op::Intersect || op == pw::Op::Occluded;
   const bool possible = status == pw::Status::Ok || status == pw::Status::Exception || status == pw::Status::OutOfMemory ||
                         status == pw::Status::FpEnvironmentChanged ||
                         (batch && status == pw::Status::WriteOutOfBounds) ||
@@ -607,8 +606,8 @@ void IsolatedPluginBackend::Impl::fail_from_status(const Lease& lease, Stage sta
       d.detail = message.empty() ? "std::bad_alloc" : message;
       break;
     case pw::Status::FpEnvironmentChanged:
-      // The worker put the bits back, but the plugin broke the ABI's promise (docs/plugin-abi.md, "Floating
-      // point"): in process it would have changed the host's arithmetic.
+      // The worker put the bits back, but the plugin broke the ABI's promise (docs/plugin-abi.md, "Lifecycle
+      // and threading", item 5): in process it would have changed the host's arithmetic.
       d.kind = PluginFailureKind::ContractViolation;
       d.cause = "fp-environment";
       d.detail = message;

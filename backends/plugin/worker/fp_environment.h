@@ -1,5 +1,6 @@
 #pragma once
-// The floating-point environment a plugin must leave as it found it (docs/plugin-abi.md, "Floating point"):
+// The floating-point environment a plugin must leave as it found it (docs/plugin-abi.md, "Lifecycle and
+// threading", item 5):
 // on x86 the control bits of MXCSR (flush-to-zero, denormals-are-zero, rounding mode, exception masks), per
 // thread. A plugin that sets flush-to-zero "for speed" in build and leaves it set changes every later float
 // operation of that thread (in process: the host's), so the worker compares the control bits after each call
@@ -11,7 +12,7 @@
 
 namespace twinray::plugin_worker {
 
-// The control bits of this thread's floating-point environment (0 where the target has none we read).
+// The control bits of this thread's floating-point environment (MXCSR's; elsewhere the rounding mode).
 std::uint32_t fp_control_bits();
 // Sets them back (after a violation, so the worker's own arithmetic and the next call start from the default).
 void restore_fp_control_bits(std::uint32_t bits);

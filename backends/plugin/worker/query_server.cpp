@@ -2,14 +2,13 @@
 
 #include "backends/plugin/futex.h"
 #include "backends/plugin/worker/crash_recorder.h"
+#include "backends/plugin/worker/fp_environment.h"
 
 #include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include "backends/plugin/worker/fp_environment.h"
-
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
