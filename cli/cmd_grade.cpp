@@ -138,7 +138,7 @@ void add_grade_command(CLI::App& app, CommandRunner& run) {
       "grade",
       "Grade a BVH plugin with a suite of checks (build, closest-hit, any-hit, ray-interval, axis-aligned,\n"
       "watertight, spheres, ties, deep-tree, thread-safety, determinism, performance, tree-quality,\n"
-      "batch-calls); each check runs the plugin in a fresh worker process with a time and memory limit.\n"
+      "batch-calls, complexity); each check runs the plugin in a fresh worker process with a time and memory limit.\n"
       "Prints one line per check and a total; every failure comes with a command that reproduces it.\n"
       "Exit code: 0 every required check passed, 1 a check failed (crash and timeout included), 2 bad input.");
   cmd->add_option("plugin", opt->plugin, "The plugin: a shared library exporting twinray_plugin_entry (docs/plugin-abi.md)");
