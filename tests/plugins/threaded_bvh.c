@@ -47,6 +47,12 @@
  *                        front to back"): the table's order is by box centres, not by where the ray enters
  *   8 anyhit-no-exit     any-hit remembers a hit and walks on to the end of the table (right answers, more
  *                        work: performance only)
+ *   9 last-entry-skipped the walk stops one entry before the end of its table ("the last entry is the end
+ *                        marker", as in the GPU code it was ported from, which appends one): every table's
+ *                        last entry, a leaf, is never tested, so each direction loses one primitive
+ *  10 unsorted-roots     the stable quadratic's roots q / a and c / q taken in that order, without the swap:
+ *                        for a sphere ahead of the origin q / a is the far root, reported while the near one
+ *                        is in the interval too
  */
 #include "twinray_plugin.h"
 
@@ -539,7 +545,11 @@ static int hit_sphere(const ray_ctx* r, const twinray_sphere* s, float tmin, flo
   } else {
     roots[0] = q / a;
     roots[1] = c / q;
+#if THREADED_BUG == 10
+    if (0) {
+#else
     if (roots[1] < roots[0]) {
+#endif
       double tmp = roots[0];
       roots[0] = roots[1];
       roots[1] = tmp;
@@ -589,7 +599,11 @@ static int walk(const threaded* b, const twinray_ray* ray, int any, twinray_hit*
   if (b->count == 0) return 0;
   make_ray(ray, &r);
   table = b->table[pick_table(&r)];
+#if THREADED_BUG == 9
+  end = b->node_count - 1;
+#else
   end = b->node_count;
+#endif
   at = 0;
   while (at < end) {
     const thread_link* e = &table[at];
