@@ -82,7 +82,10 @@ INSTANTIATE_TEST_SUITE_P(
         // The last entry of every table never visited: a scene of one leaf loses everything.
         ThreadedBug{"last-entry-skipped", "closest-cornell", Outcome::Fail, "answers wrong", "build-empty"},
         // The stable quadratic's roots unsorted: the far root of a sphere ahead is reported.
-        ThreadedBug{"unsorted-roots", "spheres-sizes", Outcome::Fail, "answers wrong", "closest-soup"}),
+        ThreadedBug{"unsorted-roots", "spheres-sizes", Outcome::Fail, "answers wrong", "closest-soup"},
+        // Edge functions of the vertices relative to the ray's origin: right at unit scale (every other check of
+        // the quick suite passes it), wrong from a distant viewpoint off every axis, where the products cancel.
+        ThreadedBug{"origin-edges", "closest-ball-distant", Outcome::Fail, "answers wrong", "closest-soup"}),
     [](const ::testing::TestParamInfo<ThreadedBug>& param) {
       std::string name = param.param.bug;
       for (char& c : name)

@@ -53,6 +53,11 @@
  *  10 unsorted-roots     the stable quadratic's roots q / a and c / q taken in that order, without the swap:
  *                        for a sphere ahead of the origin q / a is the far root, reported while the near one
  *                        is in the interval too
+ *  11 origin-edges       the edge functions in the ray's space (Kensler and Shirley's form): triple products
+ *                        d . ((pa - o) x (pb - o)) of the vertices relative to the origin, in float. Right at
+ *                        unit scale; a triangle of edge e seen from a distance S rounds them by about u S^2,
+ *                        an error of u S (S / e) across its edges: small triangles far from the origin gain
+ *                        and lose crossings far inside them
  */
 #include "twinray_plugin.h"
 
@@ -505,6 +510,28 @@ static int hit_triangle(const ray_ctx* r, const tri_record* tr, float tmin, floa
        tr->n[2] * (tr->p[0][2] - r->org[2])) /
       ndotd;
   if (!(t >= tmin && t <= tmax)) return 0;
+#if THREADED_BUG == 11
+  (void)p;
+  {
+    float rel[3][3], det;
+    for (e = 0; e < 3; ++e)
+      for (k = 0; k < 3; ++k) rel[e][k] = tr->p[e][k] - r->org[k];
+    for (e = 0; e < 3; ++e) {
+      const float* pa = rel[(e + 1) % 3];
+      const float* pb = rel[(e + 2) % 3];
+      w[e] = r->dir[0] * (pa[1] * pb[2] - pa[2] * pb[1]) + r->dir[1] * (pa[2] * pb[0] - pa[0] * pb[2]) +
+             r->dir[2] * (pa[0] * pb[1] - pa[1] * pb[0]);
+    }
+    if (!((w[0] >= 0.0f && w[1] >= 0.0f && w[2] >= 0.0f) || (w[0] <= 0.0f && w[1] <= 0.0f && w[2] <= 0.0f)))
+      return 0;
+    det = w[0] + w[1] + w[2];
+    if (det == 0.0f) return 0;
+    *t_out = t;
+    *u_out = w[1] / det;
+    *v_out = w[2] / det;
+    return 1;
+  }
+#endif
   for (k = 0; k < 3; ++k) p[k] = r->org[k] + t * r->dir[k];
   /* w[e]: the edge function of the edge opposite vertex e, n . ((p_b - p_a) x (p - p_a)) */
   for (e = 0; e < 3; ++e) {
