@@ -1,5 +1,6 @@
 // The checks that compare answers with a reference, ray by ray (answers.h says what counts as wrong):
-//   closest-hit   closest hits of camera, uniform and diffuse rays
+//   closest-hit   closest hits of camera, uniform and diffuse rays; with an "origin", of rays from that point
+//                 at interior points of the triangles (a distant viewpoint)
 //   any-hit       any-hit answers of shadow (and other) rays
 //   ray-interval  the same rays cut just before and just after their first surface (grade_rays.h), and rays
 //                 whose interval ends exactly at a crossing every float test computes exactly (or one float
@@ -51,13 +52,24 @@ RaySet rays_for(CheckContext& ctx) {
   switch (spec.category) {
     case Category::ClosestHit: {
       set.queries = Queries::Closest;
-      std::vector<crosscheck::RayKind> kinds = spec.rays.empty() ? std::vector{crosscheck::RayKind::Camera} : spec.rays;
+      if (spec.origin) {
+        // A viewpoint: rays from `origin` at interior points of the scene's triangles (deep_tree_rays' set), and
+        // the kinds only when the check lists them. From far off every axis (all three coordinates large),
+        // a test whose products take the vertices relative to the ray's origin (ray-space edge functions)
+        // rounds them by u S^2 against the u S of a test that takes them relative to a vertex
+        // (docs/grading.md, "The thirteenth round: a threaded BVH").
+        if (!scene.geometry.has_triangles()) suite_error(ctx, "a closest-hit check with an origin needs triangles");
+        set.rays = deep_tree_rays(scene, count, spec.seed, spec.origin);
+      }
+      std::vector<crosscheck::RayKind> kinds =
+          spec.rays.empty() ? (spec.origin ? std::vector<crosscheck::RayKind>{} : std::vector{crosscheck::RayKind::Camera})
+                            : spec.rays;
       if (spec.image) {
         // The image's pixels first; the other kinds follow.
         PixelRays pixels = camera_pixel_rays(scene, ctx.count_or(kDefaultKindRays));
         set.image_width = pixels.width;
         set.image_height = pixels.height;
-        set.rays = std::move(pixels.rays);
+        set.rays.insert(set.rays.begin(), pixels.rays.begin(), pixels.rays.end());
         std::erase(kinds, crosscheck::RayKind::Camera);
       }
       for (const crosscheck::RayKind k : kinds) {

@@ -112,7 +112,7 @@ std::vector<crosscheck::RayKind> ray_kinds_of(const JsonNode& node) {
 std::vector<std::string_view> parameters_of(Category c) {
   switch (c) {
     case Category::Build: return {"count", "reference"};
-    case Category::ClosestHit: return {"rays", "count", "reference", "image", "second_scene"};
+    case Category::ClosestHit: return {"rays", "count", "reference", "image", "second_scene", "origin"};
     case Category::AnyHit: return {"rays", "count", "reference"};
     case Category::RayInterval: return {"rays", "count", "reference"};
     case Category::AxisAligned: return {"count", "reference"};
