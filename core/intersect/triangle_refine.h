@@ -294,12 +294,12 @@ TWINRAY_REFINE_INLINE Ends t_ends(const Crossing& c) {
   return {static_cast<float>(x - slack), static_cast<float>(x + slack)};
 }
 
-// q (within err of the exact value, per lane: u and v) clamped to [0, 1], if certain: 0 and 1 are floats, so
-// clamping after rounding is the same as rounding after clamping. The ends of the interval are clamped in
+// q clamped to [0, 1], if certain, per lane (u and v), where `slack` covers both the error of q (within err of
+// the exact value) and the roundings of q -+ slack: err + 2u |q| or more, as in round_ends. 0 and 1 are
+// floats, so clamping after rounding is the same as rounding after clamping. The ends of the interval are clamped in
 // double and rounded; a lane is certain when both round to the same float and that float is 0 from an
 // interval at or below 0, or normal (a value that rounds into the subnormal range goes to the exact path).
-TWINRAY_REFINE_INLINE bool certify_barycentrics(const Vec2d& q, const Vec2d& err, float& u, float& v) {
-  const Vec2d slack = err + abs(q) * 0x1p-52;  // as in round_ends
+TWINRAY_REFINE_INLINE bool certify_barycentrics(const Vec2d& q, const Vec2d& slack, float& u, float& v) {
   const Vec2d zero = {0.0, 0.0}, one = {1.0, 1.0};
   Vec2d lo = q - slack, hi = q + slack;
   // <= rather than <: an end of -0 becomes +0, the float the exact path returns for u or v clamped to 0.
@@ -336,11 +336,25 @@ TWINRAY_REFINE_INLINE bool certify_barycentrics(const RefineRay& ray, const Cros
   const Vec4 terms = (abs(m1) + abs(m2)) + (0x1p-100 / kSumBound) * a_terms;
   // (e2.q, e1.q, and the absolute terms of their bounds)
   const Vec4 s = sums(c.e2 * q, c.e1 * q, abs(c.e2) * terms, abs(c.e1) * terms);
-  const Vec2d num = {s.v[0], -s.v[1]}, num_err = Vec2d{s.v[2], s.v[3]} * kSumBound;
+  const Vec2d num = {s.v[0], -s.v[1]}, err_sums = {s.v[2], s.v[3]};
   const Vec2d uv = num * quotient.r;
-  const Vec2d bound = ((abs(num) * quotient.den_err + quotient.abs_den * num_err) * quotient.w +
-                       (3.0 * kUnit) * abs(uv)) * (1.0 + 0x1p-40);
-  return certify_barycentrics(uv, bound, u, v);
+  // The slack of certify_barycentrics, ((|num| Ed + |D| En) w + 3u |uv|)(1 + 2^-40) + 2u |uv| with En =
+  // kSumBound err_sums, regrouped so that the chain after the sums is one product level and two additions
+  // (thirteenth round, docs/bvh-backend.md: the winner's tail is on every closest-hit query's path):
+  // |num| coef_num + err_sums coef_err + |uv| coef_uv, with coef_num = fl(fl(Ed w)(1 + 2^-40)) and coef_err =
+  // fl(fl(|D| w) kCrossingBound) (kCrossingBound = kSumBound (1 + 2^-40) exactly) computed from the quotient
+  // alone, before the sums are ready, and coef_uv = 5u + 3u 2^-40 (exact: 43 bits). Each of the first two
+  // terms passes through at most 10 roundings counting w's own five (Ed w or |D| w, the factor, the product
+  // with |num| or err_sums, two additions), a factor (1 - u)^10 > 1 - 2^-49, which the 1 + 2^-40 still covers
+  // with more than 2^-41 to spare, as the header's derivation asks; the third passes through two (its product
+  // and the last addition), so it is at least (5u + 3u 2^-40)(1 - u)^2 |uv|, no less than the 3u (1 +
+  // 2^-40)(1 - u)^3 + 2u (1 - u) that the grouping before this round guaranteed. So the slack bounds what it
+  // did before.
+  const double coef_num = (quotient.den_err * quotient.w) * (1.0 + 0x1p-40);
+  const double coef_err = (quotient.abs_den * quotient.w) * kCrossingBound;
+  constexpr double coef_uv = 5.0 * kUnit + 3.0 * kUnit * 0x1p-40;
+  const Vec2d slack = (abs(num) * coef_num + err_sums * coef_err) + abs(uv) * coef_uv;
+  return certify_barycentrics(uv, slack, u, v);
 }
 
 // How many times the exact path was taken, process-wide (for tests and measurements of the fallback rate).
