@@ -148,8 +148,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
         continue;
       }
     } else {
-      const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
-      if constexpr (kStats) prims_tested += count;
+      if constexpr (kStats) prims_tested += WideRef::count(ref);
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
         const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
         // Block by block, walked by pointer: a leaf has at least one lane, so the test comes before the check.
@@ -179,6 +178,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
           if (lanes == 0) break;
         }
       } else if constexpr (kSpheres) {
+        const std::uint32_t first = WideRef::first_sphere(ref), count = WideRef::count(ref);
         for (std::uint32_t i = first; i < first + count; ++i) {
           const StoredSphere& s = prims.spheres[i];
           float t;
@@ -246,7 +246,6 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 template <bool kTriangles, bool kSpheres, bool kStats, int kCopy>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
-  const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
     const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
     // Block by block, walked by pointer: most leaves are one block, tested without a loop counter or an index.
@@ -262,6 +261,7 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       if (lanes == 0) break;
     }
   } else if constexpr (kSpheres) {
+    const std::uint32_t first = WideRef::first_sphere(ref), count = WideRef::count(ref);
     for (std::uint32_t i = first; i < first + count; ++i) {
       if constexpr (kStats) ++prims_tested;
       const StoredSphere& s = prims.spheres[i];
