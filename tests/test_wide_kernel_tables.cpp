@@ -123,7 +123,9 @@ TEST(WideLeafRef, TriangleLeafDecodesToItsBlockAndLanes) {
   // The table is zero where no triangle leaf's top byte lands (inner and sphere references).
   for (std::uint32_t top = 0; top < 256; ++top) {
     const bool triangle_leaf = WideRef::is_leaf(top << 24) && !WideRef::is_sphere_leaf(top << 24);
-    if (!triangle_leaf) EXPECT_EQ(kWideLeafLanes[top], 0u) << top;
+    if (!triangle_leaf) {
+      EXPECT_EQ(kWideLeafLanes[top], 0u) << top;
+    }
   }
 }
 
