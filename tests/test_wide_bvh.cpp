@@ -54,8 +54,11 @@ void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
       ++filled;
       const std::uint32_t ref = node.child[s];
       if (!WideRef::is_leaf(ref)) {
-        ASSERT_LT(ref, nodes.size());
-        const WideNode& child = nodes[ref];
+        // A node's byte offset (wide_node.h), never the root's.
+        ASSERT_EQ(ref % sizeof(WideNode), 0u);
+        ASSERT_GT(ref, 0u);
+        ASSERT_LT(wide_node_index(ref), nodes.size());
+        const WideNode& child = nodes[wide_node_index(ref)];
         for (int c = 0; c < kWideWidth; ++c) {
           if (std::isinf(child.lo[0][c])) continue;
           for (int a = 0; a < 3; ++a) {
@@ -63,7 +66,7 @@ void expect_well_formed(const WideBackend& tree, const SceneGeometry& g) {
             EXPECT_GE(box.hi[a], child.hi[a][c]);
           }
         }
-        stack.push_back(ref);
+        stack.push_back(wide_node_index(ref));
         continue;
       }
       const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);

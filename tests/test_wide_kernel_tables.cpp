@@ -1,6 +1,7 @@
-// The bvh8 kernels' small parts that are not traversal: the SSE2 ray check, the push order and the octant
-// rows. Traversal itself is checked against brute force (BvhVsBrute, BackendsAgree).
+// The bvh8 kernels' small parts that are not traversal: the SSE2 ray check, the push order, the octant
+// rows and the leaf references' decoding. Traversal itself is checked against brute force (BvhVsBrute, BackendsAgree).
 
+#include "backends/wide/wide_leaf_ref.h"
 #include "backends/wide/wide_node.h"
 #include "backends/wide/wide_octant_rows.h"
 #include "backends/wide/wide_push_order.h"
@@ -88,6 +89,44 @@ TEST(WideOctantRows, NearPlaneIsTheLowOneExactlyWhenTheDirectionIsPositive) {
       EXPECT_EQ(kWideOctantRows[octant].near_row[a], negative ? WideNode::hi_row(a) : WideNode::lo_row(a));
       EXPECT_EQ(kWideOctantRows[octant].far_row[a], negative ? WideNode::lo_row(a) : WideNode::hi_row(a));
     }
+}
+
+// Every triangle leaf a reference can name (each count, each starting lane, blocks at both ends of the 24-bit
+// range): the decode gives the first block, the run of `count` lanes from the first lane, and back the slot and
+// the count; a sphere leaf keeps its 26-bit first sphere; inner references are not leaves.
+TEST(WideLeafRef, TriangleLeafDecodesToItsBlockAndLanes) {
+  const std::uint32_t blocks[] = {0u, 1u, 12345u, WideRef::kBlockMask - 1, WideRef::kBlockMask};
+  for (const std::uint32_t block : blocks)
+    for (std::uint32_t lane = 0; lane < kTriangleBlockLanes; ++lane)
+      for (std::uint32_t count = 1; count <= WideRef::kMaxLeafCount; ++count) {
+        const std::uint32_t slot = block * kTriangleBlockLanes + lane;
+        const std::uint32_t ref = WideRef::leaf(slot, count, false);
+        ASSERT_TRUE(WideRef::is_leaf(ref));
+        ASSERT_FALSE(WideRef::is_sphere_leaf(ref));
+        EXPECT_EQ(WideRef::count(ref), count);
+        EXPECT_EQ(WideRef::first(ref), slot);
+        EXPECT_EQ(WideRef::first_slot(ref), slot);
+        const WideTriangleLeaf leaf = wide_triangle_leaf(ref);
+        EXPECT_EQ(leaf.block, block) << slot << " " << count;
+        std::uint32_t expected = 0;
+        for (std::uint32_t i = 0; i < count; ++i) expected |= 1u << (lane + i);
+        EXPECT_EQ(leaf.lanes, expected) << slot << " " << count;
+      }
+  for (const std::uint32_t first : {0u, 1u, 7u, WideRef::kFirstMask})
+    for (std::uint32_t count = 1; count <= WideRef::kMaxLeafCount; ++count) {
+      const std::uint32_t ref = WideRef::leaf(first, count, true);
+      EXPECT_TRUE(WideRef::is_leaf(ref) && WideRef::is_sphere_leaf(ref));
+      EXPECT_EQ(WideRef::first(ref), first);
+      EXPECT_EQ(WideRef::first_sphere(ref), first);
+      EXPECT_EQ(WideRef::count(ref), count);
+    }
+  // The table is zero where no triangle leaf's top byte lands (inner and sphere references).
+  for (std::uint32_t top = 0; top < 256; ++top) {
+    const bool triangle_leaf = WideRef::is_leaf(top << 24) && !WideRef::is_sphere_leaf(top << 24);
+    if (!triangle_leaf) {
+      EXPECT_EQ(kWideLeafLanes[top], 0u) << top;
+    }
+  }
 }
 
 }  // namespace

@@ -32,12 +32,16 @@ void WideBackend::build(const SceneGeometry& geometry) {
     throw std::length_error("bvh8: too many primitives for 26-bit leaf references (at most 2^26 triangles or spheres)");
   const BvhTree binary = build_bvh(primitive_bounds(geometry), static_cast<std::uint32_t>(n_triangles), options_.binary, isa_);
   WideTree tree = collapse_to_wide(binary, options_.collapse);
+  // Inner references become byte offsets below the leaf bit (wide_node.h).
+  if (tree.nodes.size() > kWideMaxNodes)
+    throw std::length_error("bvh8: too many nodes for 31-bit node references (at most 2^31 bytes of nodes)");
 
   // The collapse numbers the leaves in node order, so siblings' primitives are neighbours in the store too.
   std::vector<LeafToGather> leaves(tree.leaves.size());
   std::transform(tree.leaves.begin(), tree.leaves.end(), leaves.begin(),
                  [](const WideLeafRange& leaf) { return LeafToGather{leaf.first_prim, leaf.count, leaf.spheres}; });
-  // Leaves share blocks: a reference names a first slot, not a first block (wide_leaf_ref.h).
+  // Leaves share blocks: a reference names a first slot, not a first block (wide_leaf_ref.h); inner references
+  // name a node by its byte offset (wide_node.h).
   // Into a new store, taken over only once every reference fits: a build that throws leaves the previous
   // tree, store and kernels together.
   PrimitiveStore prims;
@@ -46,7 +50,10 @@ void WideBackend::build(const SceneGeometry& geometry) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.nodes.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin(); n < r.end(); ++n)
       for (std::uint32_t& child : tree.nodes[n].child) {
-        if (!WideRef::is_leaf(child)) continue;
+        if (!WideRef::is_leaf(child)) {  // a node's index (0 in an empty slot, never read)
+          child = wide_inner_ref(child);
+          continue;
+        }
         const std::uint32_t index = child & ~WideRef::kLeafBit;
         const LeafToGather& leaf = leaves[index];
         if (offsets[index] > WideRef::kFirstMask)

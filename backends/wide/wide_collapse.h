@@ -61,8 +61,9 @@ struct WideLeafRange {
 };
 
 struct WideTree {
-  // nodes[0] is the root. Leaf children are written as WideRef::kLeafBit | index into `leaves`, for the
-  // backend to replace with references into its primitive store. Leaves are numbered in node order (node
+  // nodes[0] is the root. Inner children are written as node indices and leaf children as
+  // WideRef::kLeafBit | index into `leaves`, for the backend to replace with byte offsets (wide_inner_ref) and
+  // references into its primitive store. Leaves are numbered in node order (node
   // by node, slot by slot), the order in which the backend stores their primitives.
   std::vector<WideNode> nodes;
   std::vector<WideLeafRange> leaves;

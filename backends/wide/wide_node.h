@@ -11,8 +11,10 @@
 // distance of the near plane is +inf and of the far plane -inf, for any finite origin and any
 // direction), so traversal needs no count of children. Filled slots come first.
 //
-// A child reference is either the index of another node (top bit clear) or a leaf (top bit set) naming a
-// run of primitives in the PrimitiveStore: for triangles the first slot (block * 4 + lane: leaves share
+// A child reference is either another node (top bit clear: its byte offset in the node array, index * 224, so
+// that the traversal reads a node's rows at a per-ray row pointer plus the reference, with no multiplication on
+// the path from one node to the next; the collapse writes indices and WideBackend::build converts them) or a
+// leaf (top bit set) naming a run of primitives in the PrimitiveStore: for triangles the first slot (block * 4 + lane: leaves share
 // blocks, LeafPacking::kSharedBlocks in primitive_gather.h) and the number of triangles, for spheres the
 // first sphere and their number. Leaves never mix kinds. The encoding (WideRef) and what a triangle leaf
 // means to the traversal are in wide_leaf_ref.h.
@@ -37,6 +39,16 @@ struct alignas(32) WideNode {
   static constexpr std::size_t hi_row(int axis) { return lo_row(axis) + 3 * kWideWidth; }
 };
 static_assert(sizeof(WideNode) == 224, "seven 32-byte units");
+
+// An inner child reference: the node's byte offset (see above), below the leaf bit for every node of a tree of at
+// most kWideMaxNodes nodes (WideBackend::build refuses a larger tree: 2^31 bytes of nodes, about 9.6 million).
+inline constexpr std::uint32_t kWideMaxNodes = static_cast<std::uint32_t>((WideRef::kLeafBit - 1) / sizeof(WideNode) + 1);
+static_assert(std::uint64_t{kWideMaxNodes - 1} * sizeof(WideNode) < WideRef::kLeafBit, "the last node's offset is not a leaf");
+static_assert(std::uint64_t{kWideMaxNodes} * sizeof(WideNode) >= WideRef::kLeafBit, "no node more would fit");
+constexpr std::uint32_t wide_inner_ref(std::uint32_t index) {
+  return index * static_cast<std::uint32_t>(sizeof(WideNode));
+}
+constexpr std::uint32_t wide_node_index(std::uint32_t ref) { return ref / static_cast<std::uint32_t>(sizeof(WideNode)); }
 
 // The traversal stack holds at most (width - 1) entries per level below the root.
 inline constexpr std::size_t kWideMaxDepth = 128;

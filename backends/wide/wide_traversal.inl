@@ -40,14 +40,11 @@ TWINRAY_KERNEL inline std::uint64_t filled_slots(const WideNode& node) {
   return n;
 }
 
-// nodes[index] with the 224-byte stride as one multiplication: GCC spells a constant factor of 224 as
-// lea, sub and shl (three dependent operations, the same latency as imul's three cycles), two instructions
-// more per node visit.
-TWINRAY_KERNEL inline const WideNode& node_at(const WideNode* nodes, std::uint32_t index) {
-  static_assert(sizeof(WideNode) == 224);
-  std::uint64_t offset = index;
-  asm("imul $224, %0, %0" : "+r"(offset));
-  return *reinterpret_cast<const WideNode*>(reinterpret_cast<const char*>(nodes) + offset);
+// The node with reference `ref`, its byte offset (wide_node.h): one addition from a popped reference to the node's
+// address, where an index took a multiplication by 224 as well (three cycles more on the path from one node to
+// the next, and one instruction).
+TWINRAY_KERNEL inline const WideNode& node_at(const WideNode* nodes, std::uint32_t ref) {
+  return *reinterpret_cast<const WideNode*>(reinterpret_cast<const char*>(nodes) + ref);
 }
 
 // Pops the next entry worth visiting (entry <= tmax). False when the stack is exhausted.
@@ -148,8 +145,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
         continue;
       }
     } else {
-      const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
-      if constexpr (kStats) prims_tested += count;
+      if constexpr (kStats) prims_tested += WideRef::count(ref);
       if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
         const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
         // Block by block, walked by pointer: a leaf has at least one lane, so the test comes before the check.
@@ -179,6 +175,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
           if (lanes == 0) break;
         }
       } else if constexpr (kSpheres) {
+        const std::uint32_t first = WideRef::first_sphere(ref), count = WideRef::count(ref);
         for (std::uint32_t i = first; i < first + count; ++i) {
           const StoredSphere& s = prims.spheres[i];
           float t;
@@ -246,7 +243,6 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kAttributes>
 template <bool kTriangles, bool kSpheres, bool kStats, int kCopy>
 TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint32_t ref, const Ray& ray,
                                          const TriangleRay& tri_ray, std::uint64_t& prims_tested) {
-  const std::uint32_t first = WideRef::first(ref), count = WideRef::count(ref);
   if (kTriangles && (!kSpheres || !WideRef::is_sphere_leaf(ref))) {
     const WideTriangleLeaf leaf = wide_triangle_leaf(ref);  // its blocks and lanes (wide_leaf_ref.h)
     // Block by block, walked by pointer: most leaves are one block, tested without a loop counter or an index.
@@ -262,6 +258,7 @@ TWINRAY_KERNEL inline bool leaf_occluded(const PrimitiveStore& prims, std::uint3
       if (lanes == 0) break;
     }
   } else if constexpr (kSpheres) {
+    const std::uint32_t first = WideRef::first_sphere(ref), count = WideRef::count(ref);
     for (std::uint32_t i = first; i < first + count; ++i) {
       if constexpr (kStats) ++prims_tested;
       const StoredSphere& s = prims.spheres[i];
@@ -290,9 +287,9 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCop
 
   // The ray's own interval: a leaf whose only hit lies at the rounded tmin or tmax is not culled by the box
   // test's own rounding, whose near and far distances are bounds of the exact ones (ray_box.h).
-  std::uint32_t index = 0;  // a node: leaves never go on the stack
+  std::uint32_t ref = 0;  // a node (the root), by its byte offset (wide_node.h): leaves never go on the stack
   for (;;) {
-    const WideNode& node = node_at(bvh.nodes, index);
+    const WideNode& node = node_at(bvh.nodes, ref);
     if constexpr (kStats) boxes_tested += filled_slots(node);
     // The box test reads the ray's broadcast vectors as memory operands (the load is part of the
     // arithmetic instruction): kept in registers instead, they are live across the leaf test's call,
@@ -314,7 +311,7 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCop
       if constexpr (!kNearFirst) {
         // Visit the lowest slot (largest area) now; push the others so the next lowest pops first. (The slot
         // straight from __builtin_ctz as main had it: through an unsigned variable GCC adds a zero extension.)
-        index = node.child[__builtin_ctz(inner)];
+        ref = node.child[__builtin_ctz(inner)];
         size += push_children(node, inner & (inner - 1), stack + size);
       } else {
         // The nearest entry (the lowest slot among equals) now; the others pushed as above.
@@ -330,13 +327,13 @@ template <bool kTriangles, bool kSpheres, bool kStats, bool kNearFirst, int kCop
           }
           others = inner & ~(1u << now);
         }
-        index = node.child[now];
+        ref = node.child[now];
         size += push_children(node, others, stack + size);
       }
       continue;
     }
     if (size == 0) break;
-    index = stack[--size];
+    ref = stack[--size];
   }
 
   if constexpr (kStats) {
