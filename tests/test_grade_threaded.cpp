@@ -47,6 +47,10 @@ TEST(GradeThreaded, CorrectThreadedBvhGetsFullMarks) {
       EXPECT_EQ(c.max_points, 0.0) << terminal_check_line(c);
       continue;
     }
+    // The complexity check is judged by wall-clock time and worth 0 points: on a loaded machine a correct tree can
+    // measure above its threshold (docs/grading.md, "Worth 0 points, for now"), so only its points are asserted
+    // here (the score above); GradeMeasure.ComplexityTellsATreeFromBruteForce tests what it tells apart.
+    if (c.category == Category::Complexity) continue;
     EXPECT_EQ(c.outcome, Outcome::Pass) << terminal_check_line(c);
   }
 }
