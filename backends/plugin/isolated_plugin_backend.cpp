@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <mutex>
 #include <new>
 #include <stdexcept>
@@ -174,6 +175,7 @@ class IsolatedPluginBackend::Impl {
   bool has_intersect_batch() const { return (batch_functions_ & pw::kHasIntersectBatch) != 0; }
   bool has_occluded_batch() const { return (batch_functions_ & pw::kHasOccludedBatch) != 0; }
   std::string captured_output() const { return worker_ ? worker_->output() : std::string(); }
+  std::optional<double> worker_cpu_seconds() const;
   std::optional<PluginFailure> failure() const;
   const std::string& sandbox_description() const { return sandbox_; }
   void shutdown();
@@ -654,6 +656,17 @@ void IsolatedPluginBackend::Impl::fail_bad_hit(const Lease& lease, Stage stage, 
 }
 
 // Runs on the monitor thread as soon as the worker has been reaped.
+// The process CPU clock of the worker (clock_getcpuclockid: every thread's time, readable by the parent without
+// privileges). Read only while the worker runs (not yet reaped), so the pid belongs to no other process.
+std::optional<double> IsolatedPluginBackend::Impl::worker_cpu_seconds() const {
+  if (!worker_ || !worker_->running()) return std::nullopt;
+  clockid_t clock;
+  if (clock_getcpuclockid(worker_->pid(), &clock) != 0) return std::nullopt;
+  timespec ts{};
+  if (clock_gettime(clock, &ts) != 0) return std::nullopt;
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
 void IsolatedPluginBackend::Impl::on_worker_exit(const WorkerTermination& t) {
   const bool clean = clean_exit_expected_.load() && t.exited && t.exit_code == 0 &&
                      block_->header.crash.what.load() == pw::kCrashNone;
@@ -979,6 +992,7 @@ bool IsolatedPluginBackend::has_intersect_batch() const { return impl_->has_inte
 bool IsolatedPluginBackend::has_occluded_batch() const { return impl_->has_occluded_batch(); }
 void IsolatedPluginBackend::use_instance(std::size_t index) { impl_->use_instance(index); }
 std::string IsolatedPluginBackend::captured_output() const { return impl_->captured_output(); }
+std::optional<double> IsolatedPluginBackend::worker_cpu_seconds() const { return impl_->worker_cpu_seconds(); }
 std::optional<PluginFailure> IsolatedPluginBackend::failure() const { return impl_->failure(); }
 std::string IsolatedPluginBackend::sandbox_description() const { return impl_->sandbox_description(); }
 void IsolatedPluginBackend::shutdown() { impl_->shutdown(); }

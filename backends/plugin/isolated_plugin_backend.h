@@ -67,6 +67,12 @@ class IsolatedPluginBackend final : public Backend {
   // process are independent). Not to be called concurrently with other calls.
   void use_instance(std::size_t index);
 
+  // CPU seconds the worker process has spent so far, every thread of it (the plugin's own threads too, and the
+  // query threads' brief yielding waits for the next request, futex.h): the grader's timed checks take the
+  // difference around a run as the plugin's CPU time, which a busy machine moves far less than wall clock
+  // (docs/grading.md, "The thirteenth round: CPU time"). None when the worker is gone or its clock unreadable.
+  std::optional<double> worker_cpu_seconds() const;
+
   // What the plugin printed so far (stdout and stderr interleaved), truncated to PluginLimits::output_bytes.
   std::string captured_output() const;
   // The failure that ended the worker, if one did.

@@ -15,6 +15,11 @@
 // ratios keeps a burst of load on one call from deciding it (the fastest run of each scene, tried first, paired
 // a lucky run of one with an unlucky run of the other: a correct plugin measured 0.65 and 1.14). Nodes per ray
 // (when the plugin counts them) are reported beside it, not judged: a plugin's own counts are not evidence.
+//
+// Every run is timed twice over: by wall clock (`growth_exponent`, as since the twelfth round) and by the CPU
+// time of the plugin's worker process (`growth_exponent_cpu`, timed_query.h), and the CPU exponent is the one
+// judged when it could be read: time spent waiting for a core on a busy grader is not the plugin's, and wall
+// clock counted it (docs/grading.md, "The thirteenth round: CPU time").
 
 #include "harness/grade/checks.h"
 #include "harness/grade/timed_query.h"
@@ -70,27 +75,34 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
 
   PluginInstance plugin = ctx.built_plugin();  // instance 0 on the scene, 1 on second_scene
   double best[2][2] = {{INFINITY, INFINITY}, {INFINITY, INFINITY}};
-  std::vector<double> round_growth[2];  // per round: large over small, per ray, measured back to back
+  double best_cpu[2][2] = {{INFINITY, INFINITY}, {INFINITY, INFINITY}};
+  std::vector<double> round_growth[2];      // per round: large over small, per ray, measured back to back
+  std::vector<double> round_growth_cpu[2];  // the same in the worker's CPU time (timed_query.h)
+  bool has_cpu = true;                      // every run's CPU time could be read
   QueryStats stats[2];
   const auto timing_start = std::chrono::steady_clock::now();
   for (int r = 0; r < kRounds; ++r) {
     if (r >= kMinRounds &&
         std::chrono::duration<double>(std::chrono::steady_clock::now() - timing_start).count() > kRoundsSeconds)
       break;
-    double t[2][2];
+    RunTime t[2][2];
     for (int k = 0; k < 2; ++k) {
       const int s = (k + r) % 2;  // the scenes' order alternates, so neither always runs first
       plugin.use_instance(static_cast<std::size_t>(s));
       for (int q = 0; q < 2; ++q) {
         QueryStats st;
-        t[s][q] = time_one_run(*plugin, rays[s], q == 1, st);
-        best[s][q] = std::min(best[s][q], t[s][q]);
+        t[s][q] = time_run(*plugin, rays[s], q == 1, st);
+        best[s][q] = std::min(best[s][q], t[s][q].wall);
+        best_cpu[s][q] = std::min(best_cpu[s][q], t[s][q].cpu);
+        has_cpu = has_cpu && t[s][q].has_cpu();
         if (q == 0) stats[s] = st;
       }
     }
     for (int q = 0; q < 2; ++q) {
-      const double small = per_ray(t[0][q], rays[0].size());
-      round_growth[q].push_back(small > 0.0 ? per_ray(t[1][q], rays[1].size()) / small : 0.0);
+      const double small = per_ray(t[0][q].wall, rays[0].size());
+      round_growth[q].push_back(small > 0.0 ? per_ray(t[1][q].wall, rays[1].size()) / small : 0.0);
+      const double small_cpu = per_ray(t[0][q].cpu, rays[0].size());
+      round_growth_cpu[q].push_back(small_cpu > 0.0 ? per_ray(t[1][q].cpu, rays[1].size()) / small_cpu : 0.0);
     }
   }
   plugin.end();
@@ -102,28 +114,44 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
                {"max_growth_exponent", max_e}};
   std::vector<std::string> failed;
   std::string detail;
+  const auto median = [](std::vector<double> g) {
+    std::sort(g.begin(), g.end());
+    return g.empty() ? 0.0 : g[g.size() / 2];
+  };
+  v.figures["judged_on"] = has_cpu ? "cpu" : "wall";
   for (int q = 0; q < 2; ++q) {
     const double per[2] = {per_ray(best[0][q], rays[0].size()), per_ray(best[1][q], rays[1].size())};
     // The median of the rounds' paired ratios: a wake-up delay of the worker on a busy machine (milliseconds,
     // against calls of a few) lands on one call of a pair, and the median drops it; the fastest run of each
     // scene would instead pair a lucky run of one with an unlucky run of the other.
-    std::vector<double> g = round_growth[q];
-    std::sort(g.begin(), g.end());
-    const double growth = g.empty() ? 0.0 : g[g.size() / 2];
+    const double growth = median(round_growth[q]);
     const double e = exponent(1.0, growth, prim_ratio);
     const double e_ref = exponent(ref[0][q], ref[1][q], prim_ratio);
     v.figures[query_names[q]] = {{"seconds_per_ray", {per[0], per[1]}},
                                  {"growth", growth},
-                                 {"rounds", g.size()},
+                                 {"rounds", round_growth[q].size()},
                                  {"growth_exponent", e},
                                  {"bvh_nodes_growth_exponent", e_ref}};
-    detail += fmt::format("{}{} hit: time per ray x{:.2f} for x{:.1f} primitives (exponent {:.2f}; bvh's nodes per ray {:.2f})",
-                          q == 0 ? "" : ", ", q == 0 ? "closest" : "any", growth,
-                          prim_ratio, e, e_ref);
-    if (!(e <= max_e))
-      failed.push_back(fmt::format("{} hit grows with exponent {:.2f}, above {:.2f} (1 is linear: brute force or a "
-                                   "tree degenerated into a list)",
-                                   query_names[q], e, max_e));
+    // The same in CPU time, which is what is judged when it could be read (timed_query.h): waiting for a core
+    // on a busy machine is not counted, so load moves it far less (docs/grading.md, "The thirteenth round").
+    double judged = e;
+    if (has_cpu) {
+      const double growth_cpu = median(round_growth_cpu[q]);
+      const double e_cpu = exponent(1.0, growth_cpu, prim_ratio);
+      nlohmann::json& f = v.figures[query_names[q]];
+      f["cpu_seconds_per_ray"] = {per_ray(best_cpu[0][q], rays[0].size()), per_ray(best_cpu[1][q], rays[1].size())};
+      f["growth_cpu"] = growth_cpu;
+      f["growth_exponent_cpu"] = e_cpu;
+      judged = e_cpu;
+    }
+    detail += fmt::format("{}{} hit: time per ray x{:.2f} for x{:.1f} primitives (exponent {:.2f}",
+                          q == 0 ? "" : ", ", q == 0 ? "closest" : "any", growth, prim_ratio, e);
+    if (has_cpu) detail += fmt::format(", in CPU time {:.2f}", judged);
+    detail += fmt::format("; bvh's nodes per ray {:.2f})", e_ref);
+    if (!(judged <= max_e))
+      failed.push_back(fmt::format("{} hit grows with exponent {:.2f}{}, above {:.2f} (1 is linear: brute force or "
+                                   "a tree degenerated into a list)",
+                                   query_names[q], judged, has_cpu ? " in CPU time" : "", max_e));
   }
   if (ctx.env.plugin.traits().counts_traversal) {
     const auto nodes = [&](int s) { return per_ray(stats[s].nodes_visited, rays[s].size()); };
