@@ -655,7 +655,6 @@ void IsolatedPluginBackend::Impl::fail_bad_hit(const Lease& lease, Stage stage, 
   fail(d, static_cast<int>(lease.index()));
 }
 
-// Runs on the monitor thread as soon as the worker has been reaped.
 // The process CPU clock of the worker (clock_getcpuclockid: every thread's time, readable by the parent without
 // privileges). Read only while the worker runs (not yet reaped), so the pid belongs to no other process.
 std::optional<double> IsolatedPluginBackend::Impl::worker_cpu_seconds() const {
@@ -667,6 +666,7 @@ std::optional<double> IsolatedPluginBackend::Impl::worker_cpu_seconds() const {
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
 }
 
+// Runs on the monitor thread as soon as the worker has been reaped.
 void IsolatedPluginBackend::Impl::on_worker_exit(const WorkerTermination& t) {
   const bool clean = clean_exit_expected_.load() && t.exited && t.exit_code == 0 &&
                      block_->header.crash.what.load() == pw::kCrashNone;

@@ -21,6 +21,7 @@
 // judged when it could be read: time spent waiting for a core on a busy grader is not the plugin's, and wall
 // clock counted it (docs/grading.md, "The thirteenth round: CPU time").
 
+#include "harness/grade/answers.h"
 #include "harness/grade/checks.h"
 #include "harness/grade/timed_query.h"
 
@@ -68,9 +69,9 @@ CheckVerdict run_complexity_check(CheckContext& ctx) {
   double ref[2][2];
   for (int s = 0; s < 2; ++s)
     for (int q = 0; q < 2; ++q) {
-      QueryStats st;
-      time_one_run((s == 0 ? ctx.scene : big).reference("bvh"), rays[s], q == 1, st);
-      ref[s][q] = per_ray(st.nodes_visited, rays[s].size());
+      const Answers a =
+          trace_rays((s == 0 ? ctx.scene : big).reference("bvh"), rays[s], q == 1 ? Queries::Any : Queries::Closest);
+      ref[s][q] = per_ray(a.stats.nodes_visited, rays[s].size());
     }
 
   PluginInstance plugin = ctx.built_plugin();  // instance 0 on the scene, 1 on second_scene

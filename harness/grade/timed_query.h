@@ -26,11 +26,6 @@ struct RunTime {
 // One `intersect` (any_hit false) or `occluded` call over `rays`, timed; `stats` gets that call's counts.
 RunTime time_run(const Backend& backend, std::span<const Ray> rays, bool any_hit, QueryStats& stats);
 
-// Seconds (wall clock) one such call takes.
-inline double time_one_run(const Backend& backend, std::span<const Ray> rays, bool any_hit, QueryStats& stats) {
-  return time_run(backend, rays, any_hit, stats).wall;
-}
-
 // A total (seconds, or nodes or primitives counted) per ray; 0 for no rays.
 inline double per_ray(double total, std::size_t rays) { return rays ? total / static_cast<double>(rays) : 0.0; }
 inline double per_ray(std::uint64_t total, std::size_t rays) { return per_ray(static_cast<double>(total), rays); }
