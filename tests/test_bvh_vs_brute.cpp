@@ -121,9 +121,7 @@ std::size_t expect_identical_to_brute(const SceneGeometry& geometry, const std::
     Hit a, b;
     const bool found_a = brute->intersect(ray, a, &brute_stats);
     const bool found_b = bvh->intersect(ray, b, &bvh_stats);
-    const bool same = found_a == found_b && a.geom_id == b.geom_id && a.prim_id == b.prim_id &&
-                      same_bits(a.t, b.t) && same_bits(a.u, b.u) && same_bits(a.v, b.v) &&
-                      same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
+    const bool same = found_a == found_b && test::same_hit_bits(a, b);
     const bool occluded_a = brute->occluded(ray, &brute_stats);
     const bool occluded_b = bvh->occluded(ray, &bvh_stats);
     if (!same || occluded_a != found_a || occluded_b != found_a) {

@@ -20,7 +20,7 @@ namespace twinray {
 namespace {
 
 using test::kInf;
-using test::same_bits;
+using test::same_hit_bits;
 
 // Random rays through a box of half extent `spread`, half of them aimed at a random point (so most hit),
 // one in four with a zero direction component, a mix of interval bounds.
@@ -56,11 +56,6 @@ std::vector<Ray> exact_suite_grid_rays(std::uint64_t seed, int n) {
   return rays;
 }
 
-bool same_hit(const Hit& a, const Hit& b) {
-  return a.geom_id == b.geom_id && a.prim_id == b.prim_id && same_bits(a.t, b.t) && same_bits(a.u, b.u) &&
-         same_bits(a.v, b.v) && same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
-}
-
 struct Agreement {
   std::size_t rays = 0, hits = 0, identical = 0, edge = 0;
 };
@@ -82,7 +77,7 @@ Agreement expect_exact_agrees_with_brute(const SceneGeometry& geometry, const st
     a.hits += found ? 1 : 0;
     const bool occluded_b = brute->occluded(ray), occluded_e = exact->occluded(ray);
     EXPECT_EQ(occluded_e, e.found());
-    if (same_hit(b, e) && occluded_b == occluded_e) {
+    if (same_hit_bits(b, e) && occluded_b == occluded_e) {
       ++a.identical;
       continue;
     }
@@ -90,7 +85,7 @@ Agreement expect_exact_agrees_with_brute(const SceneGeometry& geometry, const st
     const arbiter::Ruling closest = arbiter.rule_closest(ray, b, brute->traits());
     const arbiter::Ruling any = arbiter.rule_occluded(ray, occluded_b, brute->traits());
     const bool explained = closest.right && any.right &&
-                           (same_hit(b, e) || closest.reason == arbiter::Reason::Edge) &&
+                           (same_hit_bits(b, e) || closest.reason == arbiter::Reason::Edge) &&
                            (occluded_b == occluded_e || any.reason == arbiter::Reason::Edge);
     if (!explained && ++reported <= 5)
       ADD_FAILURE() << "brute " << b.geom_id << "/" << b.prim_id << " t=" << b.t << ", exact " << e.geom_id << "/"
@@ -192,7 +187,7 @@ TEST(ExactBackend, ConcurrentQueriesMatchSerialOnes) {
   std::vector<Hit> serial(rays.size()), parallel(rays.size());
   for (std::size_t i = 0; i < rays.size(); ++i) exact->intersect(rays[i], serial[i]);
   tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t i) { exact->intersect(rays[i], parallel[i]); });
-  for (std::size_t i = 0; i < rays.size(); ++i) EXPECT_TRUE(same_hit(serial[i], parallel[i])) << i;
+  for (std::size_t i = 0; i < rays.size(); ++i) EXPECT_TRUE(same_hit_bits(serial[i], parallel[i])) << i;
 }
 
 }  // namespace

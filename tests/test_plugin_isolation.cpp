@@ -32,6 +32,7 @@ namespace {
 using test::failure_of;
 using test::make_ray;
 using test::same_bits;
+using test::same_hit_bits;
 
 const std::filesystem::path kIsoBrute = TWINRAY_TEST_BRUTE_PLUGIN;
 
@@ -114,11 +115,6 @@ bool same_ray_bits(const Ray& a, const Ray& b) {
   return same_bits(a.org.x, b.org.x) && same_bits(a.org.y, b.org.y) && same_bits(a.org.z, b.org.z) &&
          same_bits(a.dir.x, b.dir.x) && same_bits(a.dir.y, b.dir.y) && same_bits(a.dir.z, b.dir.z) &&
          same_bits(a.tmin, b.tmin) && same_bits(a.tmax, b.tmax);
-}
-
-bool same_hit_bits(const Hit& a, const Hit& b) {
-  return a.geom_id == b.geom_id && a.prim_id == b.prim_id && same_bits(a.t, b.t) && same_bits(a.u, b.u) &&
-         same_bits(a.v, b.v) && same_bits(a.ng.x, b.ng.x) && same_bits(a.ng.y, b.ng.y) && same_bits(a.ng.z, b.ng.z);
 }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
