@@ -91,9 +91,10 @@ inline void expect_caught(const grade::Scorecard& card, const GradeBugCase& b) {
 // Full marks on the test suite for a correct plugin that claims neither watertightness nor the tie rule and has no
 // batch functions (the LBVH, the threaded BVH): the watertight and ties checks reported, worth nothing and not
 // required; batch-calls skipped; every other check passed, except the complexity check's outcome: it is judged
-// by wall-clock time and worth 0 points, and on a loaded machine a correct tree can measure above its threshold
-// (docs/grading.md, "Worth 0 points, for now"), so only its points count here (the score);
-// GradeMeasure.ComplexityTellsATreeFromBruteForce tests what it tells apart.
+// by time (the worker's CPU time since the thirteenth round) and worth 0 points in the test suite, and on a loaded
+// machine a correct tree has measured close to its threshold (docs/grading.md, "The thirteenth round: CPU
+// time"), so only its points count here (the score); GradeMeasure.ComplexityTellsATreeFromBruteForce tests what
+// it tells apart.
 inline void expect_full_marks_without_claims(const grade::Scorecard& card) {
   EXPECT_TRUE(card.passed()) << check_lines(card);
   EXPECT_EQ(card.score(), card.max_score()) << check_lines(card);
